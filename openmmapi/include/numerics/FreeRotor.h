@@ -1,0 +1,441 @@
+#ifndef OPENMMRIGID_NUMERICS_FREEROTOR_H_
+#define OPENMMRIGID_NUMERICS_FREEROTOR_H_
+
+/*
+ * The exact motion of a free rigid rotor: R. van Zon and J. Schofield, "Numerical implementation of
+ * the exact dynamics of free rigid bodies", J. Comput. Phys. 225 (2007) 145-164 (cited below as vZS).
+ * ../shared/reference/free-rotor-notes.md restates the algorithm and its delicate cases.
+ *
+ * Conventions (vZS Section 2): moments are principal moments, omega is the angular velocity in the
+ * body frame, the attitude A maps lab vectors to body vectors (v_body = A v_lab). Euler's equations
+ * I1 d(omega1)/dt = (I2 - I3) omega2 omega3 (cyclic) and dA/dt = -W(omega) A are solved exactly.
+ *
+ * Kinds and the formula each uses:
+ * - spherical, linear, and any rotation about a principal axis: A(t) = U(-omega t) A(0) (vZS eq. (3.25)).
+ * - symmetric: omega precesses about the unique axis (vZS eqs. (3.26)-(3.31)).
+ * - asymmetric: omega from Jacobi elliptic functions (vZS eqs. (3.33)-(3.41)); the attitude is
+ *   A = Q^T T1'(omega(t)) T2'(psi) B, where Q takes the given axes to internal ones that satisfy the
+ *   Jacobi ordering (vZS eq. (3.32), Section 4.3). The angle psi = int Omega dt of eq. (3.20) is
+ *   evaluated in one of two exact representations:
+ *     ThetaSeries: the complex theta function of vZS eqs. (3.54), (4.3)-(4.8). Its nome
+ *       q = exp(-pi K'/K) tends to 1 at the separatrix (m -> 1), where the series stop converging.
+ *     EllipticIntegral: eq. (3.20) rewritten as Omega = L/I3 + L (I3 - I1) / (I1 I3 (1 - n sn^2(u|m)))
+ *       with n = -I3 (I2 - I1) / (I1 (I3 - I2)) <= 0, so that psi is an incomplete elliptic integral of
+ *       the third kind (DLMF 19.2.7), evaluated with Carlson's RF and RJ. It is valid for every m in
+ *       [0, 1], the separatrix m = 1 included.
+ *   Automatic takes the theta series for m <= 0.9 (at most about five terms) and the elliptic
+ *   integral above.
+ *
+ * Accuracy: omega and A to about 1e-14 relative for times of a few rotation periods; over long times
+ * the phase error grows like (rotation angle) x machine epsilon, which is inherent in the rounding of t.
+ */
+
+#include "numerics/Elliptic.h"
+#include "numerics/Matrix3.h"
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace OpenMMRigid {
+
+class FreeRotor {
+public:
+    enum Kind { Linear = 0, Spherical = 1, Symmetric = 2, Asymmetric = 3 };
+    enum Representation { Automatic = 0, ThetaSeries = 1, EllipticIntegral = 2 };
+
+    /**
+     * Create the rotor from its initial state.
+     *
+     * @param moments         the three principal moments of inertia, in any order. One may be zero if
+     *                        the other two are equal (a linear rotor).
+     * @param omega           the angular velocity in the body (principal-axis) frame at t = 0
+     * @param attitude        the lab-to-body rotation matrix A(0), orthonormal with determinant +1
+     * @param representation  how an asymmetric top evaluates its precession angle (see the file comment)
+     * @throws std::invalid_argument naming the problem, for non-finite or inconsistent input
+     */
+    FreeRotor(const Vector3& moments, const Vector3& omega, const Matrix3& attitude = identityMatrix(),
+              Representation representation = Automatic);
+
+    /**
+     * The state at time t (any sign, measured in the time unit of omega).
+     *
+     * @param t         the time
+     * @param omega     on exit, the body-frame angular velocity omega(t)
+     * @param attitude  on exit, the attitude matrix A(t)
+     */
+    void evolve(double t, Vector3& omega, Matrix3& attitude) const;
+
+    Kind getKind() const { return kind; }
+    static const char* kindName(Kind kind) {
+        static const char* names[] = {"linear", "spherical", "symmetric", "asymmetric"};
+        return names[kind];
+    }
+    /** The representation an asymmetric top uses (never Automatic); Automatic for the other kinds. */
+    Representation getRepresentation() const { return representation; }
+    /** The rotational kinetic energy 1/2 sum_k I_k omega_k^2. */
+    double getEnergy() const { return energy; }
+    /** The angular momentum in the body frame at t = 0, I_k omega_k. */
+    Vector3 getAngularMomentum() const {
+        return {moments[0]*omega0[0], moments[1]*omega0[1], moments[2]*omega0[2]};
+    }
+    const Vector3& getMoments() const { return moments; }
+    /** The initial angular velocity; for a linear rotor its component along the axis is removed. */
+    const Vector3& getOmega() const { return omega0; }
+    const Matrix3& getAttitude() const { return attitude0; }
+    /** The elliptic parameter m of an asymmetric top (vZS eq. (3.40)); 0 for the other kinds. */
+    double getParameter() const { return m; }
+
+private:
+    static constexpr int maxThetaTerms = 64;
+
+    void validate(const Vector3& moments, const Vector3& omega, const Matrix3& attitude) const;
+    void classify();
+    void initializeAsymmetric(Representation requested);
+    void initializeThetaSeries();
+    void initializeEllipticIntegral();
+    double precessionAngleIntegral(double u, double sn, double cn, double dn) const;
+    void thetaOne(double u, double& re, double& im) const;
+    Matrix3 bodyToInvariantFrame(const Vector3& internalOmega) const;
+
+    Vector3 moments, omega0;
+    Matrix3 attitude0;
+    Kind kind;
+    Representation representation;
+    double energy;
+    bool steady;           // omega along a principal axis (or zero): uniform rotation
+    int uniqueAxis;        // symmetric top: the axis whose moment differs
+    double symmetricPrecession;  // symmetric top: omega_p = (1 - I_unique / I_perp) omega_unique (eq. (3.26))
+    // Asymmetric top, all in internal axes: v_internal[j] = axisSign[j] * v_given[axisOf[j]].
+    std::array<int, 3> axisOf;
+    std::array<double, 3> axisSign;
+    double internalMoments[3];
+    double angularMomentum;  // |L|
+    double w1m, w2m, w3m, wp, m, m1, quarterPeriod, epsilon;
+    Matrix3 b;               // B = T1'(omega(0))^T Q A(0)
+    // Theta series (vZS eqs. (4.3)-(4.8)).
+    int thetaTerms;
+    double thetaScale;       // pi / (2K)
+    double cr[maxThetaTerms], ci[maxThetaTerms];
+    double phase1, phase2;   // A1 and A2
+    // Elliptic integral of the third kind.
+    double characteristic;   // n
+    double halfPeriodIntegral;  // Pi(n|m), the increase of the integral over a half period 2K of u
+    double integralPrefactor;   // L (I3 - I1) / (I1 I3 wp)
+    double integralAtStart;     // the integral at u = epsilon
+};
+
+inline FreeRotor::FreeRotor(const Vector3& moments, const Vector3& omega, const Matrix3& attitude,
+                            Representation requested) :
+        moments(moments), omega0(omega), attitude0(attitude), representation(Automatic), steady(false),
+        uniqueAxis(-1), symmetricPrecession(0.0), m(0.0) {
+    if (requested != Automatic && requested != ThetaSeries && requested != EllipticIntegral)
+        throw std::invalid_argument("FreeRotor: unknown representation " + std::to_string((int) requested));
+    validate(moments, omega, attitude);
+    classify();
+    if (kind == Linear)
+        for (int k = 0; k < 3; k++)
+            if (moments[k] == 0.0)
+                omega0[k] = 0.0;
+    energy = 0.5*(moments[0]*omega0[0]*omega0[0] + moments[1]*omega0[1]*omega0[1] + moments[2]*omega0[2]*omega0[2]);
+    int zeroComponents = (omega0[0] == 0.0) + (omega0[1] == 0.0) + (omega0[2] == 0.0);
+    steady = (zeroComponents >= 2 || kind == Spherical || kind == Linear);
+    if (kind == Symmetric)
+        symmetricPrecession = (1.0 - moments[uniqueAxis]/moments[(uniqueAxis + 1)%3])*omega0[uniqueAxis];
+    if (kind == Asymmetric && !steady)
+        initializeAsymmetric(requested);
+}
+
+inline void FreeRotor::validate(const Vector3& moments, const Vector3& omega, const Matrix3& attitude) const {
+    for (int k = 0; k < 3; k++) {
+        if (!std::isfinite(moments[k]) || moments[k] < 0.0)
+            throw std::invalid_argument("FreeRotor: moment of inertia " + std::to_string(k) + " is " +
+                    std::to_string(moments[k]) + "; moments must be finite and non-negative");
+        if (!std::isfinite(omega[k]))
+            throw std::invalid_argument("FreeRotor: angular velocity component " + std::to_string(k) + " is not finite");
+        for (int j = 0; j < 3; j++)
+            if (!std::isfinite(attitude[k][j]))
+                throw std::invalid_argument("FreeRotor: the attitude matrix has a non-finite entry");
+    }
+    if (orthonormalityError(attitude) > 1e-10)
+        throw std::invalid_argument("FreeRotor: the attitude matrix is not orthonormal (|A^T A - 1| = " +
+                std::to_string(orthonormalityError(attitude)) + ")");
+    if (determinant(attitude) < 0.0)
+        throw std::invalid_argument("FreeRotor: the attitude matrix has determinant -1 (a reflection, not a rotation)");
+}
+
+inline void FreeRotor::classify() {
+    // Moments that agree to a few ulps are equal: the formulas of the general case stay exact for
+    // any distinct moments, so the tolerance only absorbs the rounding of the caller's arithmetic.
+    const double tolerance = 8*std::numeric_limits<double>::epsilon()*std::max({moments[0], moments[1], moments[2]});
+    auto equal = [&](int i, int j) { return std::fabs(moments[i] - moments[j]) <= tolerance; };
+    int zeros = 0, zeroAxis = -1;
+    for (int k = 0; k < 3; k++)
+        if (moments[k] <= tolerance) {
+            zeros++;
+            zeroAxis = k;
+        }
+    if (zeros > 1)
+        throw std::invalid_argument("FreeRotor: more than one moment of inertia is zero");
+    if (zeros == 1) {
+        if (!equal((zeroAxis + 1)%3, (zeroAxis + 2)%3))
+            throw std::invalid_argument("FreeRotor: a rotor with a zero moment of inertia is linear and needs "
+                    "the other two moments equal; got " + std::to_string(moments[(zeroAxis + 1)%3]) + " and " +
+                    std::to_string(moments[(zeroAxis + 2)%3]));
+        moments[zeroAxis] = 0.0;
+        kind = Linear;
+        return;
+    }
+    if (equal(0, 1) && equal(1, 2))
+        kind = Spherical;
+    else if (equal(0, 1))
+        kind = Symmetric, uniqueAxis = 2;
+    else if (equal(1, 2))
+        kind = Symmetric, uniqueAxis = 0;
+    else if (equal(0, 2))
+        kind = Symmetric, uniqueAxis = 1;
+    else
+        kind = Asymmetric;
+}
+
+inline void FreeRotor::initializeAsymmetric(Representation requested) {
+    // Put the middle moment on the second axis by a cyclic (proper) permutation, then apply the
+    // Jacobi ordering of vZS eq. (3.32): if needed, swap axes 1 and 3 and flip axis 2 (vZS eq. (4.10)).
+    int middle = 0;
+    for (int k = 0; k < 3; k++) {
+        int below = (moments[(k + 1)%3] < moments[k]) + (moments[(k + 2)%3] < moments[k]);
+        if (below == 1)
+            middle = k;
+    }
+    std::array<int, 3> cyclic = {(middle + 2)%3, middle, (middle + 1)%3};
+    const double ix = moments[cyclic[0]], iy = moments[cyclic[1]], iz = moments[cyclic[2]];
+    // 2E Iy - L^2 = sum_k I_k w_k^2 (Iy - I_k), free of the cancellation of the difference.
+    double twoEIyMinusL2 = 0.0;
+    for (int k = 0; k < 3; k++)
+        twoEIyMinusL2 += moments[k]*omega0[k]*omega0[k]*(iy - moments[k]);
+    bool flip = (twoEIyMinusL2 > 0.0 && ix < iz) || (twoEIyMinusL2 < 0.0 && ix > iz);
+    if (flip) {
+        axisOf = {cyclic[2], cyclic[1], cyclic[0]};
+        axisSign = {1.0, -1.0, 1.0};
+    }
+    else {
+        axisOf = cyclic;
+        axisSign = {1.0, 1.0, 1.0};
+    }
+    double w0[3];
+    for (int j = 0; j < 3; j++) {
+        internalMoments[j] = moments[axisOf[j]];
+        w0[j] = axisSign[j]*omega0[axisOf[j]];
+    }
+    const double i1 = internalMoments[0], i2 = internalMoments[1], i3 = internalMoments[2];
+    // L^2 - 2E I_j = sum_k I_k w_k^2 (I_k - I_j) (notes: "Where the formulas are delicate").
+    double l2MinusTwoEI1 = 0.0, l2MinusTwoEI3 = 0.0, l2 = 0.0;
+    for (int k = 0; k < 3; k++) {
+        double weight = internalMoments[k]*w0[k]*w0[k];
+        l2MinusTwoEI1 += weight*(internalMoments[k] - i1);
+        l2MinusTwoEI3 += weight*(internalMoments[k] - i3);
+        l2 += weight*internalMoments[k];
+    }
+    angularMomentum = std::sqrt(l2);
+    // vZS eqs. (3.36)-(3.41). sgn(0) is taken as +1; any fixed choice satisfies Euler's equations.
+    const double sign1 = (w0[0] < 0.0 ? -1.0 : 1.0), sign3 = (w0[2] < 0.0 ? -1.0 : 1.0);
+    w1m = sign1*std::sqrt(std::fmax(0.0, l2MinusTwoEI3/(i1*(i1 - i3))));
+    w2m = -sign1*std::sqrt(std::fmax(0.0, l2MinusTwoEI3/(i2*(i2 - i3))));
+    w3m = sign3*std::sqrt(std::fmax(0.0, l2MinusTwoEI1/(i3*(i3 - i1))));
+    wp = (i2 > i3 ? 1.0 : -1.0)*sign3*std::sqrt(std::fmax(0.0, l2MinusTwoEI1*(i3 - i2)/(i1*i2*i3)));
+    double numerator = l2MinusTwoEI3*(i1 - i2), denominator = l2MinusTwoEI1*(i3 - i2);
+    m = std::clamp(numerator/denominator, 0.0, 1.0);
+    // 1 - m = (L^2 - 2E I2)(I3 - I1) / ((L^2 - 2E I1)(I3 - I2)), again without cancellation.
+    double l2MinusTwoEI2 = 0.0;
+    for (int k = 0; k < 3; k++)
+        l2MinusTwoEI2 += internalMoments[k]*w0[k]*w0[k]*(internalMoments[k] - i2);
+    m1 = std::clamp(l2MinusTwoEI2*(i3 - i1)/denominator, 0.0, 1.0);
+    quarterPeriod = Special::ellipticK(m, m1);
+
+    // The initial argument: sn(eps) = w2/w2m, cn(eps) = w1/w1m, dn(eps) = w3/w3m (vZS eq. (3.42)),
+    // with all three ratios used so that eps keeps full precision near the turning points.
+    double sn0 = std::clamp(w0[1]/w2m, -1.0, 1.0);
+    double cn0 = std::clamp(w0[0]/w1m, 0.0, 1.0);
+    double dn0 = std::clamp(w0[2]/w3m, 0.0, 1.0);
+    epsilon = Special::ellipticFFromJacobi(sn0, cn0*cn0, dn0*dn0);
+
+    // B = T1'(omega(0))^T Q A(0) (notes, initialization step 4).
+    Matrix3 qa;
+    for (int j = 0; j < 3; j++)
+        for (int c = 0; c < 3; c++)
+            qa[j][c] = axisSign[j]*attitude0[axisOf[j]][c];
+    b = multiplyTransposed(bodyToInvariantFrame({w0[0], w0[1], w0[2]}), qa);
+
+    if (requested == Automatic)
+        requested = (m <= 0.9 ? ThetaSeries : EllipticIntegral);
+    if (requested == ThetaSeries && m1 == 0.0)
+        throw std::invalid_argument("FreeRotor: the theta-series representation does not exist on the separatrix (m = 1)");
+    representation = requested;
+    if (representation == ThetaSeries)
+        initializeThetaSeries();
+    else
+        initializeEllipticIntegral();
+}
+
+inline void FreeRotor::initializeThetaSeries() {
+    const double i1 = internalMoments[0], i3 = internalMoments[2];
+    const double kComplement = Special::ellipticK(m1, m);
+    const double logNome = -M_PI*kComplement/quarterPeriod;  // ln q, q = exp(-pi K'/K)
+    thetaScale = M_PI/(2.0*quarterPeriod);
+    // eta = sgn(w3m) K' - F(I3 w3m / L | 1 - m) (vZS eq. (3.47)). With x = I3 w3m / L the difference
+    // K' - F(|x| | m1) equals F of the complementary amplitude (DLMF 19.11.3), which by homogeneity
+    // of RF is sqrt(c) RF(m L3^2, m L^2, m L3^2 + c) with L3 = I3 w3m and c = L^2 - L3^2 =
+    // I1 (2E I3 - L^2) / (I3 - I1); this form has no cancellation when L is close to axis 3.
+    const double l3 = i3*w3m;
+    double twoEI3MinusL2 = 0.0;
+    for (int k = 0; k < 3; k++) {
+        double w = (k == 0 ? w1m : 0.0);  // evaluate at u = 0, where omega = (w1m, 0, w3m)
+        twoEI3MinusL2 += internalMoments[k]*w*w*(i3 - internalMoments[k]);
+    }
+    const double c = i1*twoEI3MinusL2/(i3 - i1);
+    const double eta = (w3m < 0.0 ? -1.0 : 1.0)*std::sqrt(c)*
+            Special::carlsonRF(m*l3*l3, m*angularMomentum*angularMomentum, m*l3*l3 + c);
+    // Theta coefficients (notes, initialization step 9), in log form so that nothing overflows:
+    // 2 q^{n(n+1)+1/4} cosh(b) = exp(a + b) + exp(a - b).
+    thetaTerms = 0;
+    double firstTerm = 0.0;
+    for (int n = 0; n < maxThetaTerms; n++) {
+        double a = (n*(n + 1.0) + 0.25)*logNome;
+        double b = (2*n + 1)*thetaScale*eta;
+        double plus = std::exp(a + b), minus = std::exp(a - b);
+        double sign = (n%2 == 0 ? 1.0 : -1.0);
+        cr[n] = sign*(plus + minus);
+        ci[n] = -sign*(plus - minus);
+        thetaTerms = n + 1;
+        double size = std::fabs(cr[n]) + std::fabs(ci[n]);
+        if (n == 0)
+            firstTerm = size;
+        else if (size < 0.25*std::numeric_limits<double>::epsilon()*firstTerm)
+            break;
+    }
+    if (thetaTerms == maxThetaTerms)
+        throw std::invalid_argument("FreeRotor: the theta series does not converge at m = " + std::to_string(m) +
+                "; use the elliptic-integral representation this close to the separatrix");
+    // A2 (vZS eq. (4.8)): L/I1 + (pi wp / 2K) [coth(pi eta / 2K) - 2 sum q^{2n}/(1 - q^{2n}) 2 sinh(n pi eta / K)].
+    double sum = 0.0;
+    for (int n = 1; n < 100000; n++) {
+        double q2n = std::exp(2.0*n*logNome);
+        double term = q2n/(-std::expm1(2.0*n*logNome))*2.0*std::sinh(2.0*n*thetaScale*eta);
+        sum += term;
+        if (std::fabs(term) <= 0.25*std::numeric_limits<double>::epsilon()*std::fabs(sum))
+            break;
+    }
+    phase2 = angularMomentum/i1 + thetaScale*wp*(1.0/std::tanh(thetaScale*eta) - 2.0*sum);
+    double re, im;
+    thetaOne(epsilon, re, im);
+    phase1 = std::atan2(im, re);  // A1 (vZS eq. (4.5))
+}
+
+inline void FreeRotor::initializeEllipticIntegral() {
+    const double i1 = internalMoments[0], i2 = internalMoments[1], i3 = internalMoments[2];
+    characteristic = -i3*(i2 - i1)/(i1*(i3 - i2));
+    integralPrefactor = angularMomentum*(i3 - i1)/(i1*i3*wp);
+    halfPeriodIntegral = (m1 == 0.0 ? 0.0 : Special::ellipticPiFromJacobi(characteristic, 1.0, 0.0, m1));
+    double sn, cn, dn;
+    Special::jacobiElliptic(epsilon, m, m1, sn, cn, dn);
+    integralAtStart = precessionAngleIntegral(epsilon, sn, cn, dn);
+}
+
+/**
+ * int_0^u du' / (1 - n sn^2(u')) for any real u: reduce u = 2K j + r with |r| <= K, then the
+ * integral is 2 j Pi(n|m) + Pi(n; am(r)|m), and sn(r) = (-1)^j sn(u), cn(r) = (-1)^j cn(u).
+ */
+inline double FreeRotor::precessionAngleIntegral(double u, double sn, double cn, double dn) const {
+    double halfPeriods = (m1 == 0.0 ? 0.0 : std::nearbyint(u/(2.0*quarterPeriod)));
+    double parity = (std::fmod(halfPeriods, 2.0) == 0.0 ? 1.0 : -1.0);
+    return 2.0*halfPeriods*halfPeriodIntegral + Special::ellipticPiFromJacobi(characteristic, parity*sn, cn*cn, dn*dn);
+}
+
+/** Re and Im of theta_1 at the complex argument pi (u - i eta) / (2K) (vZS eq. (4.4), notes step 9). */
+inline void FreeRotor::thetaOne(double u, double& re, double& im) const {
+    double x = thetaScale*u;
+    double s1 = std::sin(x), c1 = std::cos(x);
+    double s2 = 2.0*s1*c1, c2 = (c1 - s1)*(c1 + s1);
+    double s = s1, c = c1;  // sin and cos of (2n + 1) x, advanced by the angle 2x
+    re = 0.0;
+    im = 0.0;
+    for (int n = 0; n < thetaTerms; n++) {
+        re += cr[n]*s;
+        im += ci[n]*c;
+        double next = s*c2 + c*s2;
+        c = c*c2 - s*s2;
+        s = next;
+    }
+}
+
+/** T1'(omega) of vZS eq. (3.13): its columns are e1, e2 and L/|L| in the internal body frame. */
+inline Matrix3 FreeRotor::bodyToInvariantFrame(const Vector3& w) const {
+    double l1 = internalMoments[0]*w[0], l2 = internalMoments[1]*w[1], l3 = internalMoments[2]*w[2];
+    double perp = std::hypot(l1, l2);
+    double l = angularMomentum;
+    return {{{l1*l3/(l*perp), -l2/perp, l1/l},
+             {l2*l3/(l*perp), l1/perp, l2/l},
+             {-perp/l, 0.0, l3/l}}};
+}
+
+inline void FreeRotor::evolve(double t, Vector3& omega, Matrix3& attitude) const {
+    if (!std::isfinite(t))
+        throw std::invalid_argument("FreeRotor::evolve: the time is not finite");
+    if (steady) {
+        omega = omega0;
+        attitude = multiply(rotationMatrix(scaled(omega0, -t)), attitude0);
+        return;
+    }
+    if (kind == Symmetric) {
+        // vZS eqs. (3.26)-(3.31): omega(t) = U(-wp t e) omega(0), A(t) = U(-wp t e) U(-L(0) t / I_perp) A(0).
+        Vector3 axis = {0.0, 0.0, 0.0};
+        axis[uniqueAxis] = -symmetricPrecession*t;
+        Matrix3 precession = rotationMatrix(axis);
+        double perpendicular = moments[(uniqueAxis + 1)%3];
+        Vector3 spin = scaled(getAngularMomentum(), -t/perpendicular);
+        omega = multiply(precession, omega0);
+        attitude = multiply(precession, multiply(rotationMatrix(spin), attitude0));
+        return;
+    }
+    // Asymmetric top: vZS eqs. (3.33)-(3.35), then A = Q^T T1'(omega(t)) T2'(psi) B.
+    double u = wp*t + epsilon;
+    double sn, cn, dn;
+    Special::jacobiElliptic(u, m, m1, sn, cn, dn);
+    Vector3 w = {w1m*cn, w2m*sn, w3m*dn};
+    double cosPsi, sinPsi;
+    if (representation == ThetaSeries) {
+        // vZS eq. (4.3) (notes, evolution step 2).
+        double re, im;
+        thetaOne(u, re, im);
+        double angle = phase1 + phase2*t;
+        double c = std::cos(angle), s = std::sin(angle), size = std::hypot(re, im);
+        cosPsi = (c*re + s*im)/size;
+        sinPsi = (s*re - c*im)/size;
+    }
+    else {
+        const double i3 = internalMoments[2];
+        double psi = angularMomentum/i3*t + integralPrefactor*(precessionAngleIntegral(u, sn, cn, dn) - integralAtStart);
+        cosPsi = std::cos(psi);
+        sinPsi = std::sin(psi);
+    }
+    Matrix3 t1 = bodyToInvariantFrame(w);
+    // T1' T2' with T2' = [[cos, sin, 0], [-sin, cos, 0], [0, 0, 1]] (vZS eq. (3.14)).
+    Matrix3 rotation;
+    for (int i = 0; i < 3; i++) {
+        rotation[i][0] = t1[i][0]*cosPsi - t1[i][1]*sinPsi;
+        rotation[i][1] = t1[i][0]*sinPsi + t1[i][1]*cosPsi;
+        rotation[i][2] = t1[i][2];
+    }
+    Matrix3 internalAttitude = multiply(rotation, b);
+    for (int j = 0; j < 3; j++) {
+        omega[axisOf[j]] = axisSign[j]*w[j];
+        for (int c = 0; c < 3; c++)
+            attitude[axisOf[j]][c] = axisSign[j]*internalAttitude[j][c];
+    }
+}
+
+} // namespace OpenMMRigid
+
+#endif // OPENMMRIGID_NUMERICS_FREEROTOR_H_
