@@ -18,6 +18,7 @@
  *   like |u| times machine epsilon, which is inherent in the rounding of u itself.
  */
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -27,6 +28,12 @@ namespace OpenMMRigid {
 namespace Special {
 
 namespace detail {
+
+// Duplication in Carlson's algorithms stops once 4^-n Q < |A_n|, with Q = (3 eps)^(-1/6) max|A_0 - x|
+// for RF and (eps/4)^(-1/6) max|A_0 - x| for RJ: the Taylor remainder is then below machine
+// precision (Carlson, Numer. Algorithms 10 (1995) 13, eqs. (2.2) and (2.36)).
+inline const double rfStopFactor = std::pow(3.0*std::numeric_limits<double>::epsilon(), -1.0/6.0);
+inline const double rjStopFactor = std::pow(0.25*std::numeric_limits<double>::epsilon(), -1.0/6.0);
 
 inline void requireParameter(const char* function, double m, double m1) {
     if (!(m >= 0.0 && m <= 1.0 && m1 >= 0.0 && m1 <= 1.0))
@@ -50,9 +57,8 @@ inline double carlsonRF(double x, double y, double z) {
         return 0.0;
     double mean = (x + y + z)/3.0;
     const double mean0 = mean;
-    // Stop when 4^-n Q < |A_n|: the remainder of the Taylor series is then below 3 eps (Carlson 1995).
-    double q = std::pow(3.0*std::numeric_limits<double>::epsilon(), -1.0/6.0)*
-               std::fmax(std::fabs(mean - x), std::fmax(std::fabs(mean - y), std::fabs(mean - z)));
+    double q = detail::rfStopFactor*
+               std::max({std::fabs(mean - x), std::fabs(mean - y), std::fabs(mean - z)});
     double scale = 1.0;  // 4^-n
     const double x0 = x, y0 = y;
     while (q*scale >= std::fabs(mean)) {
@@ -101,9 +107,8 @@ inline double carlsonRJ(double x, double y, double z, double p) {
     const double mean0 = mean;
     const double x0 = x, y0 = y, z0 = z;
     const double delta = (p - x)*(p - y)*(p - z);
-    double q = std::pow(0.25*std::numeric_limits<double>::epsilon(), -1.0/6.0)*
-               std::fmax(std::fmax(std::fabs(mean - x), std::fabs(mean - y)),
-                         std::fmax(std::fabs(mean - z), std::fabs(mean - p)));
+    double q = detail::rjStopFactor*
+               std::max({std::fabs(mean - x), std::fabs(mean - y), std::fabs(mean - z), std::fabs(mean - p)});
     double scale = 1.0;  // 4^-n
     double sum = 0.0;
     while (q*scale >= std::fabs(mean)) {

@@ -97,7 +97,7 @@ private:
     void initializeThetaSeries();
     void initializeEllipticIntegral();
     double precessionAngleIntegral(double u, double sn, double cn, double dn) const;
-    void thetaOne(double u, double& re, double& im) const;
+    void thetaSeries(double u, double& sn, double& cn, double& dn, double& re, double& im) const;
     Matrix3 bodyToInvariantFrame(const Vector3& internalOmega) const;
 
     Vector3 moments, omega0;
@@ -118,8 +118,10 @@ private:
     // Theta series (vZS eqs. (4.3)-(4.8)).
     int thetaTerms;
     double thetaScale;       // pi / (2K)
-    double cr[maxThetaTerms], ci[maxThetaTerms];
-    double phase1, phase2;   // A1 and A2
+    double cr[maxThetaTerms], ci[maxThetaTerms];  // complex theta_1 coefficients
+    double oddPowers[maxThetaTerms], evenPowers[maxThetaTerms];  // q^{n(n+1)} and q^{n^2}
+    double snScale, cnScale, dnScale;
+    double cosPhase1, sinPhase1, phase2;   // cos A1, sin A1 and A2
     // Elliptic integral of the third kind.
     double characteristic;   // n
     double halfPeriodIntegral;  // Pi(n|m), the increase of the integral over a half period 2K of u
@@ -283,54 +285,120 @@ inline void FreeRotor::initializeThetaSeries() {
     const double i1 = internalMoments[0], i3 = internalMoments[2];
     const double kComplement = Special::ellipticK(m1, m);
     const double logNome = -M_PI*kComplement/quarterPeriod;  // ln q, q = exp(-pi K'/K)
+    const double nome = std::exp(logNome);
     thetaScale = M_PI/(2.0*quarterPeriod);
     // eta = sgn(w3m) K' - F(I3 w3m / L | 1 - m) (vZS eq. (3.47)). With x = I3 w3m / L the difference
-    // K' - F(|x| | m1) equals F of the complementary amplitude (DLMF 19.11.3), which by homogeneity
-    // of RF is sqrt(c) RF(m L3^2, m L^2, m L3^2 + c) with L3 = I3 w3m and c = L^2 - L3^2 =
-    // I1 (2E I3 - L^2) / (I3 - I1); this form has no cancellation when L is close to axis 3.
-    const double l3 = i3*w3m;
-    double twoEI3MinusL2 = 0.0;
-    for (int k = 0; k < 3; k++) {
-        double w = (k == 0 ? w1m : 0.0);  // evaluate at u = 0, where omega = (w1m, 0, w3m)
-        twoEI3MinusL2 += internalMoments[k]*w*w*(i3 - internalMoments[k]);
-    }
-    const double c = i1*twoEI3MinusL2/(i3 - i1);
+    // K' - F(|x| | m1) is F of the complementary amplitude (DLMF 19.11.3), which by the homogeneity
+    // of RF is sqrt(c) RF(m L3^2, m L^2, m L3^2 + c) with L3 = I3 w3m and c = L^2 - L3^2 = (I1 w1m)^2
+    // (at u = 0, where omega = (w1m, 0, w3m)). This form has no cancellation when L is near axis 3.
+    const double l3 = i3*w3m, c = (i1*w1m)*(i1*w1m);
     const double eta = (w3m < 0.0 ? -1.0 : 1.0)*std::sqrt(c)*
             Special::carlsonRF(m*l3*l3, m*angularMomentum*angularMomentum, m*l3*l3 + c);
-    // Theta coefficients (notes, initialization step 9), in log form so that nothing overflows:
-    // 2 q^{n(n+1)+1/4} cosh(b) = exp(a + b) + exp(a - b).
+    // Theta coefficients (notes, initialization step 9) with the common factor 2 q^{1/4} dropped,
+    // since only the phase of theta_1 enters psi: q^{n(n+1)} (e^{(2n+1)x} +- e^{-(2n+1)x}), x = pi eta / 2K.
+    // The same powers q^{n(n+1)} and q^{n^2} give the real theta functions for sn, cn, dn.
+    const double x = thetaScale*eta;
+    const double expm1x = std::expm1(x);  // e^x - 1, kept for coth(x) below
+    double plus = 1.0 + expm1x, minus = 1.0/plus;  // e^{+-(2n+1)x}
+    const double grow = plus*plus, shrink = minus*minus;
+    double oddPower = 1.0;   // q^{n(n+1)}
+    double step = nome*nome; // q^{2(n+1)}, the ratio q^{(n+1)(n+2)} / q^{n(n+1)}
+    double evenPower = 1.0, evenStep = nome;  // q^{n^2} and q^{2n+1}
     thetaTerms = 0;
     double firstTerm = 0.0;
     for (int n = 0; n < maxThetaTerms; n++) {
-        double a = (n*(n + 1.0) + 0.25)*logNome;
-        double b = (2*n + 1)*thetaScale*eta;
-        double plus = std::exp(a + b), minus = std::exp(a - b);
         double sign = (n%2 == 0 ? 1.0 : -1.0);
-        cr[n] = sign*(plus + minus);
-        ci[n] = -sign*(plus - minus);
+        cr[n] = sign*oddPower*(plus + minus);
+        ci[n] = -sign*oddPower*(plus - minus);
+        oddPowers[n] = oddPower;
+        evenPowers[n] = evenPower;
         thetaTerms = n + 1;
         double size = std::fabs(cr[n]) + std::fabs(ci[n]);
         if (n == 0)
             firstTerm = size;
         else if (size < 0.25*std::numeric_limits<double>::epsilon()*firstTerm)
             break;
+        oddPower *= step;
+        step *= nome*nome;
+        evenPower *= evenStep;
+        evenStep *= nome*nome;
+        plus *= grow;
+        minus *= shrink;
     }
     if (thetaTerms == maxThetaTerms)
         throw std::invalid_argument("FreeRotor: the theta series does not converge at m = " + std::to_string(m) +
                 "; use the elliptic-integral representation this close to the separatrix");
-    // A2 (vZS eq. (4.8)): L/I1 + (pi wp / 2K) [coth(pi eta / 2K) - 2 sum q^{2n}/(1 - q^{2n}) 2 sinh(n pi eta / K)].
-    double sum = 0.0;
+    // Values at zero that scale the Jacobi functions (DLMF 22.2.4-22.2.6), each without the factor 2 q^{1/4}
+    // for theta_2 (the same factor is dropped from theta_1 and theta_2 in thetaSeries()).
+    double theta2 = 0.0, theta3 = 1.0, theta4 = 1.0;
+    for (int n = 0; n < thetaTerms; n++) {
+        theta2 += oddPowers[n];
+        if (n > 0) {
+            theta3 += 2.0*evenPowers[n];
+            theta4 += (n%2 == 0 ? 2.0 : -2.0)*evenPowers[n];
+        }
+    }
+    snScale = theta3/theta2;
+    cnScale = theta4/theta2;
+    dnScale = theta4/theta3;
+    // A2 (vZS eq. (4.8)): L/I1 + (pi wp / 2K) [coth(x) - 2 sum_n q^{2n} / (1 - q^{2n}) (xi^n - xi^-n)],
+    // xi = e^{2x}; 1 - q^{2n} is built up as (1 - q^{2n-2}) + q^{2n-2}(1 - q^2), free of cancellation.
+    const double oneMinusNomeSquared = -std::expm1(2.0*logNome);
+    double sum = 0.0, nomePower = nome*nome, oneMinus = oneMinusNomeSquared, xiPower = grow, xiInverse = shrink;
     for (int n = 1; n < 100000; n++) {
-        double q2n = std::exp(2.0*n*logNome);
-        double term = q2n/(-std::expm1(2.0*n*logNome))*2.0*std::sinh(2.0*n*thetaScale*eta);
+        double term = nomePower/oneMinus*(xiPower - xiInverse);
         sum += term;
         if (std::fabs(term) <= 0.25*std::numeric_limits<double>::epsilon()*std::fabs(sum))
             break;
+        oneMinus += nomePower*oneMinusNomeSquared;
+        nomePower *= nome*nome;
+        xiPower *= grow;
+        xiInverse *= shrink;
     }
-    phase2 = angularMomentum/i1 + thetaScale*wp*(1.0/std::tanh(thetaScale*eta) - 2.0*sum);
-    double re, im;
-    thetaOne(epsilon, re, im);
-    phase1 = std::atan2(im, re);  // A1 (vZS eq. (4.5))
+    const double cothX = (grow + 1.0)/(expm1x*(2.0 + expm1x));  // (e^{2x} + 1)/(e^{2x} - 1)
+    phase2 = angularMomentum/i1 + thetaScale*wp*(cothX - 2.0*sum);
+    double sn, cn, dn, re, im;
+    thetaSeries(epsilon, sn, cn, dn, re, im);
+    // A1 = arg theta_1(eps) (vZS eq. (4.5)); only its cosine and sine are needed.
+    double size = std::sqrt(re*re + im*im);
+    cosPhase1 = re/size;
+    sinPhase1 = im/size;
+}
+
+/**
+ * The theta series at u, all from one sine and cosine of zeta = pi u / 2K: the Jacobi functions
+ * sn, cn, dn (DLMF 22.2.4-22.2.6 with the theta functions of DLMF 20.2.1-20.2.4) and the real and
+ * imaginary parts of theta_1 at pi (u - i eta) / 2K (vZS eq. (4.4)), up to a common positive factor.
+ */
+inline void FreeRotor::thetaSeries(double u, double& sn, double& cn, double& dn, double& re, double& im) const {
+    const double zeta = thetaScale*u;
+    const double s1 = std::sin(zeta), c1 = std::cos(zeta);
+    double s = s1, c = c1;  // sin and cos of k zeta, advanced one k at a time
+    double theta1 = 0.0, theta2 = 0.0, theta3 = 1.0, theta4 = 1.0;
+    re = 0.0;
+    im = 0.0;
+    auto advance = [&]() {  // k -> k + 1
+        double next = s*c1 + c*s1;
+        c = c*c1 - s*s1;
+        s = next;
+    };
+    for (int n = 0; n < thetaTerms; n++) {
+        if (n > 0) {  // (s, c) at k = 2n
+            double even = 2.0*evenPowers[n]*c;
+            theta3 += even;
+            theta4 += (n%2 == 0 ? even : -even);
+            advance();
+        }
+        // (s, c) at k = 2n + 1
+        re += cr[n]*s;
+        im += ci[n]*c;
+        theta1 += (n%2 == 0 ? oddPowers[n] : -oddPowers[n])*s;
+        theta2 += oddPowers[n]*c;
+        advance();
+    }
+    sn = snScale*theta1/theta4;
+    cn = cnScale*theta2/theta4;
+    dn = dnScale*theta3/theta4;
 }
 
 inline void FreeRotor::initializeEllipticIntegral() {
@@ -353,27 +421,10 @@ inline double FreeRotor::precessionAngleIntegral(double u, double sn, double cn,
     return 2.0*halfPeriods*halfPeriodIntegral + Special::ellipticPiFromJacobi(characteristic, parity*sn, cn*cn, dn*dn);
 }
 
-/** Re and Im of theta_1 at the complex argument pi (u - i eta) / (2K) (vZS eq. (4.4), notes step 9). */
-inline void FreeRotor::thetaOne(double u, double& re, double& im) const {
-    double x = thetaScale*u;
-    double s1 = std::sin(x), c1 = std::cos(x);
-    double s2 = 2.0*s1*c1, c2 = (c1 - s1)*(c1 + s1);
-    double s = s1, c = c1;  // sin and cos of (2n + 1) x, advanced by the angle 2x
-    re = 0.0;
-    im = 0.0;
-    for (int n = 0; n < thetaTerms; n++) {
-        re += cr[n]*s;
-        im += ci[n]*c;
-        double next = s*c2 + c*s2;
-        c = c*c2 - s*s2;
-        s = next;
-    }
-}
-
 /** T1'(omega) of vZS eq. (3.13): its columns are e1, e2 and L/|L| in the internal body frame. */
 inline Matrix3 FreeRotor::bodyToInvariantFrame(const Vector3& w) const {
     double l1 = internalMoments[0]*w[0], l2 = internalMoments[1]*w[1], l3 = internalMoments[2]*w[2];
-    double perp = std::hypot(l1, l2);
+    double perp = std::sqrt(l1*l1 + l2*l2);
     double l = angularMomentum;
     return {{{l1*l3/(l*perp), -l2/perp, l1/l},
              {l2*l3/(l*perp), l1/perp, l2/l},
@@ -401,25 +452,24 @@ inline void FreeRotor::evolve(double t, Vector3& omega, Matrix3& attitude) const
     }
     // Asymmetric top: vZS eqs. (3.33)-(3.35), then A = Q^T T1'(omega(t)) T2'(psi) B.
     double u = wp*t + epsilon;
-    double sn, cn, dn;
-    Special::jacobiElliptic(u, m, m1, sn, cn, dn);
-    Vector3 w = {w1m*cn, w2m*sn, w3m*dn};
-    double cosPsi, sinPsi;
+    double sn, cn, dn, cosPsi, sinPsi;
     if (representation == ThetaSeries) {
         // vZS eq. (4.3) (notes, evolution step 2).
         double re, im;
-        thetaOne(u, re, im);
-        double angle = phase1 + phase2*t;
-        double c = std::cos(angle), s = std::sin(angle), size = std::hypot(re, im);
+        thetaSeries(u, sn, cn, dn, re, im);
+        double c2 = std::cos(phase2*t), s2 = std::sin(phase2*t), size = std::sqrt(re*re + im*im);
+        double c = cosPhase1*c2 - sinPhase1*s2, s = sinPhase1*c2 + cosPhase1*s2;  // of A1 + A2 t
         cosPsi = (c*re + s*im)/size;
         sinPsi = (s*re - c*im)/size;
     }
     else {
+        Special::jacobiElliptic(u, m, m1, sn, cn, dn);
         const double i3 = internalMoments[2];
         double psi = angularMomentum/i3*t + integralPrefactor*(precessionAngleIntegral(u, sn, cn, dn) - integralAtStart);
         cosPsi = std::cos(psi);
         sinPsi = std::sin(psi);
     }
+    Vector3 w = {w1m*cn, w2m*sn, w3m*dn};
     Matrix3 t1 = bodyToInvariantFrame(w);
     // T1' T2' with T2' = [[cos, sin, 0], [-sin, cos, 0], [0, 0, 1]] (vZS eq. (3.14)).
     Matrix3 rotation;
