@@ -14,8 +14,8 @@
  *   machine precision (Carlson, Numer. Algorithms 10 (1995) 13).
  * - ellipticK, ellipticF, ellipticPi: a few ulps relative. ellipticPi with n << -1 is computed as a
  *   difference of two terms and loses about log10(sqrt(|n|)) digits.
- * - jacobiElliptic: absolute error of a few ulps for |u| of order K; for large |u| the error grows
- *   like |u| times machine epsilon, which is inherent in the rounding of u itself.
+ * - jacobiElliptic: a few ulps relative to |f| + |u f'|, i.e. exact up to the rounding of u itself,
+ *   also near m = 1 where cn and dn are exponentially small.
  */
 
 #include <algorithm>
@@ -52,7 +52,7 @@ inline double carlsonRF(double x, double y, double z) {
     if (!(x >= 0.0 && y >= 0.0 && z >= 0.0))
         throw std::invalid_argument("carlsonRF: arguments must be non-negative numbers");
     if ((x == 0.0) + (y == 0.0) + (z == 0.0) > 1)
-        return std::numeric_limits<double>::infinity();
+        throw std::invalid_argument("carlsonRF: at most one argument may be zero (the integral diverges)");
     if (std::isinf(x) || std::isinf(y) || std::isinf(z))
         return 0.0;
     double mean = (x + y + z)/3.0;
@@ -80,33 +80,38 @@ inline double carlsonRF(double x, double y, double z) {
 
 /**
  * Carlson's degenerate integral RC(1, 1 + e) for e > -1 (DLMF 19.2.17 and 19.2.18): atan(sqrt(e))/sqrt(e)
- * for e > 0 and atanh(sqrt(-e))/sqrt(-e) for e < 0, with a series near e = 0.
+ * for e > 0 and atanh(sqrt(-e))/sqrt(-e) for e < 0, with a series near e = 0. The caller passes 1 + e
+ * as well, computed without cancellation, since near e = -1 the result depends on it alone.
  */
-inline double carlsonRCOnePlus(double e) {
+inline double carlsonRCOnePlus(double e, double onePlusE) {
     if (std::fabs(e) < 1e-4)
         return 1.0 - e*(1.0/3.0 - e*(1.0/5.0 - e*(1.0/7.0 - e/9.0)));
-    if (e > 0.0) {
-        double s = std::sqrt(e);
+    double s = std::sqrt(std::fabs(e));
+    if (e > 0.0)
         return std::atan(s)/s;
-    }
-    double s = std::sqrt(-e);
-    return std::atanh(s)/s;
+    if (e > -0.5)
+        return std::atanh(s)/s;
+    // atanh(s) = ln((1 + s)/(1 - s))/2 and 1 - s = (1 + e)/(1 + s), exact near e = -1.
+    return std::log((1.0 + s)*(1.0 + s)/onePlusE)/(2.0*s);
 }
 
 /**
  * Carlson's symmetric integral RJ(x, y, z, p) = 3/2 int_0^inf dt / ((t+p) sqrt((t+x)(t+y)(t+z))) for
  * x, y, z >= 0 (at most one zero) and p > 0 (DLMF 19.16.2), by the duplication theorem with the
  * RC correction terms of Carlson (1995), eqs. (2.36)-(2.39), and DLMF 19.36.2.
+ *
+ * The argument of each RC term is e = prod_k (sqrt(p) - sqrt(x_k)) / (sqrt(p) + sqrt(x_k)) (the
+ * ratio delta 4^-3n / d_n^2 of Carlson's paper, factored); 1 + e is formed from the complements
+ * a_k = 1 - |ratio_k| so that it keeps full precision when p is far from x, y, z and e nears -1.
  */
 inline double carlsonRJ(double x, double y, double z, double p) {
     if (!(x >= 0.0 && y >= 0.0 && z >= 0.0 && p > 0.0))
         throw std::invalid_argument("carlsonRJ: x, y, z must be non-negative and p positive");
     if ((x == 0.0) + (y == 0.0) + (z == 0.0) > 1)
-        return std::numeric_limits<double>::infinity();
+        throw std::invalid_argument("carlsonRJ: at most one of x, y, z may be zero (the integral diverges)");
     double mean = (x + y + z + 2.0*p)/5.0;
     const double mean0 = mean;
     const double x0 = x, y0 = y, z0 = z;
-    const double delta = (p - x)*(p - y)*(p - z);
     double q = detail::rjStopFactor*
                std::max({std::fabs(mean - x), std::fabs(mean - y), std::fabs(mean - z), std::fabs(mean - p)});
     double scale = 1.0;  // 4^-n
@@ -115,8 +120,19 @@ inline double carlsonRJ(double x, double y, double z, double p) {
         double sx = std::sqrt(x), sy = std::sqrt(y), sz = std::sqrt(z), sp = std::sqrt(p);
         double lambda = sx*sy + sy*sz + sz*sx;
         double d = (sp + sx)*(sp + sy)*(sp + sz);
-        double e = delta*scale*scale*scale/(d*d);
-        sum += scale/d*carlsonRCOnePlus(e);
+        double e = 1.0, complement[3], sign = 1.0;
+        const double roots[3] = {sx, sy, sz};
+        for (int k = 0; k < 3; k++) {
+            double ratio = (sp - roots[k])/(sp + roots[k]);
+            complement[k] = 2.0*std::min(sp, roots[k])/(sp + roots[k]);  // 1 - |ratio|
+            e *= ratio;
+            if (ratio < 0.0)
+                sign = -sign;
+        }
+        // 1 + e; for sign -1 it is 1 - prod(1 - a_k) = a3 + (1 - a3)(a2 + (1 - a2) a1), a sum of positive terms.
+        double onePlusE = (sign > 0.0 ? 1.0 + e :
+                complement[2] + (1.0 - complement[2])*(complement[1] + (1.0 - complement[1])*complement[0]));
+        sum += scale/d*carlsonRCOnePlus(e, onePlusE);
         x = 0.25*(x + lambda);
         y = 0.25*(y + lambda);
         z = 0.25*(z + lambda);
@@ -169,6 +185,8 @@ inline double ellipticF(double x, double m, double m1) {
     if (!(std::fabs(x) <= 1.0))
         throw std::invalid_argument("ellipticF: the argument x = sin(amplitude) must lie in [-1, 1]");
     double cos2 = (1.0 - x)*(1.0 + x);
+    if (cos2 == 0.0 && m1 == 0.0)
+        return std::copysign(std::numeric_limits<double>::infinity(), x);  // F(1|1) = atanh(1)
     return ellipticFFromJacobi(x, cos2, m1 + m*cos2);
 }
 
@@ -193,13 +211,82 @@ inline double ellipticPi(double n, double x, double m, double m1) {
     if (!(n*x*x < 1.0))
         throw std::invalid_argument("ellipticPi: the characteristic n must satisfy n x^2 < 1");
     double cos2 = (1.0 - x)*(1.0 + x);
-    return ellipticPiFromJacobi(n, x, cos2, m1 + m*cos2);
+    if (cos2 == 0.0 && m1 == 0.0)
+        return std::copysign(std::numeric_limits<double>::infinity(), x);
+    double delta2 = m1 + m*cos2;
+    if (n >= -1.0 || x == 0.0)
+        return ellipticPiFromJacobi(n, x, cos2, delta2);
+    // For n < -1 the two terms of DLMF 19.25.14 cancel (Pi is O(1/sqrt(-n)) while each term is O(F)).
+    // The relation between the characteristics n and m/n (DLMF §19.7(iii)), with c = 1/x^2, gives
+    // Pi(n) in terms of Pi(m/n), |m/n| < 1 (checked against mpmath in the tests):
+    //   Pi(n) = F - Pi(m/n) + sqrt(c) RC((c - 1)(c - m), (c - n)(c - m/n)),
+    // where F - Pi(m/n) = -(m/n)/3 x^3 RJ(cos^2, Delta^2, 1, 1 - (m/n) x^2) (DLMF 19.25.14) and, by the
+    // homogeneity of RC, sqrt(c) RC(...) = x RC(a, b) with a = cos^2 Delta^2, b = (1 - n x^2)(1 - (m/n) x^2),
+    // b - a = x^2 (1 + m - n - m/n) > 0, so RC(a, b) = atan(sqrt((b - a)/a)) / sqrt(b - a) (DLMF 19.2.18).
+    // Every term is positive: no cancellation.
+    const double x2 = x*x, ratio = m/n;
+    double excess = -ratio/3.0*x*x2*carlsonRJ(cos2, delta2, 1.0, 1.0 - ratio*x2);
+    double a = cos2*delta2, gap = x2*(1.0 + m - n - ratio);
+    double rc = (a == 0.0 ? M_PI/2.0 : std::atan(std::sqrt(gap/a)))/std::sqrt(gap);
+    return excess + x*rc;
 }
 
+namespace detail {
+
 /**
- * The Jacobi elliptic functions sn, cn, dn of (u|m) by the descending Landen transformation
- * (the arithmetic-geometric mean scale, DLMF 22.20(ii)); m = 0 and m = 1 are the trigonometric and
- * hyperbolic limits (DLMF 22.5(ii)). dn is taken as sqrt(m1 + m cn^2), which has no cancellation.
+ * sn, cn, dn for m1 < 1e-32, where K = ln(4/sqrt(m1)) + O(m1) is at least 37. The argument is reduced
+ * by the periods and symmetries (DLMF 22.4(ii)) to w in [0, K]; for w <= K/2 the expansion about
+ * m = 1 of DLMF 22.10.2 (first order in m1; the next order is below (m1 e^{2w})^2 < 16 m1 relative)
+ * gives the functions, and for w > K/2 the shift by K (DLMF 22.4.3),
+ * sn(K - v) = cn(v)/dn(v), cn(K - v) = k' sn(v)/dn(v), dn(K - v) = k'/dn(v), brings the argument back
+ * to v = K - w < K/2. Each result is a product of relatively accurate factors.
+ */
+inline void jacobiEllipticNearOne(double u, double m, double m1, double& sn, double& cn, double& dn) {
+    (void) m;
+    const double quarter = std::log(4.0/std::sqrt(m1));  // K(m) up to O(m1 K) (DLMF 19.12.1)
+    double w = std::remainder(u, 4.0*quarter);            // sn, cn have period 4K
+    double snSign = (w < 0.0 ? -1.0 : 1.0), cnSign = 1.0;
+    w = std::fabs(w);
+    if (w > quarter) {  // sn(2K - w) = sn(w), cn(2K - w) = -cn(w), dn(2K - w) = dn(w)
+        w = 2.0*quarter - w;
+        cnSign = -1.0;
+    }
+    auto expansion = [m1](double x, double& s, double& c, double& d) {
+        double t = std::tanh(x), h = 1.0/std::cosh(x);
+        double sinhCosh = std::sinh(x)*std::cosh(x);
+        s = t + 0.25*m1*(sinhCosh - x)*h*h;
+        c = h - 0.25*m1*(sinhCosh - x)*t*h;
+        d = h + 0.25*m1*(sinhCosh + x)*t*h;
+    };
+    double s, c, d;
+    if (w <= 0.5*quarter)
+        expansion(w, s, c, d);
+    else {
+        double vs, vc, vd, kc = std::sqrt(m1);
+        expansion(quarter - w, vs, vc, vd);
+        s = vc/vd;
+        c = kc*vs/vd;
+        d = kc/vd;
+    }
+    sn = snSign*s;
+    cn = cnSign*c;
+    dn = d;
+}
+
+} // namespace detail
+
+/**
+ * The Jacobi elliptic functions sn, cn, dn of (u|m) by the descending Gauss transformation
+ * (DLMF 22.7.1-22.7.3): with k = sqrt(m), k' = sqrt(m1) and k_{n+1} = (1 - k_n')/(1 + k_n'), the
+ * functions of (z_n, k_n) follow from those of (z_{n+1} = z_n/(1 + k_{n+1}), k_{n+1}) by
+ *   sn_n = (1 + k_{n+1}) sn_{n+1} / (1 + k_{n+1} sn_{n+1}^2),  cn_n = cn_{n+1} dn_{n+1} / (1 + k_{n+1} sn_{n+1}^2),
+ * and dn_n = sqrt(k_n'^2 + k_n^2 cn_n^2) (no cancellation). The moduli fall quadratically to zero, where
+ * sn = sin and cn = cos (DLMF 22.5(ii)); the last argument is rescaled by pi/(2 K(m_N)) so that the
+ * period is right to machine precision however large u is. Every step is a product or quotient of
+ * positive factors, so cn and dn keep their relative accuracy near m = 1, where they are
+ * exponentially small over most of the period. m = 0 and m = 1 are the trigonometric and hyperbolic
+ * limits (DLMF 22.5(ii)). Below m1 = 1e-32 the levels with k_n = 1 to machine precision would
+ * double the rounding error of cn at each level, so jacobiEllipticNearOne() takes over there.
  */
 inline void jacobiElliptic(double u, double m, double m1, double& sn, double& cn, double& dn) {
     detail::requireParameter("jacobiElliptic", m, m1);
@@ -217,24 +304,37 @@ inline void jacobiElliptic(double u, double m, double m1, double& sn, double& cn
         dn = cn;
         return;
     }
-    const int maxLevels = 32;  // the AGM converges quadratically; 32 levels reach m1 = 1e-300
-    double a[maxLevels + 1], c[maxLevels + 1];
-    a[0] = 1.0;
-    double b = std::sqrt(m1);
-    c[0] = std::sqrt(m);
+    if (m1 < 1e-32)
+        return detail::jacobiEllipticNearOne(u, m, m1, sn, cn, dn);
+    const int maxLevels = 40;
+    double modulus[maxLevels + 1], complement[maxLevels + 1];
+    modulus[0] = std::sqrt(m);
+    complement[0] = std::sqrt(m1);
+    double z = u;
     int levels = 0;
-    while (std::fabs(c[levels]) > std::numeric_limits<double>::epsilon()*a[levels] && levels < maxLevels) {
-        a[levels + 1] = 0.5*(a[levels] + b);
-        c[levels + 1] = 0.5*(a[levels] - b);
-        b = std::sqrt(a[levels]*b);
+    while (modulus[levels] > 1e-9 && levels < maxLevels) {
+        double kc = complement[levels];
+        modulus[levels + 1] = (1.0 - kc)/(1.0 + kc);
+        complement[levels + 1] = 2.0*std::sqrt(kc)/(1.0 + kc);
+        z /= 1.0 + modulus[levels + 1];
         levels++;
     }
-    // phi_N = 2^N a_N u, then phi_{n-1} = (phi_n + asin(c_n sin(phi_n) / a_n)) / 2  (DLMF 22.20.5).
-    double phi = std::ldexp(a[levels]*u, levels);
-    for (int n = levels; n > 0; n--)
-        phi = 0.5*(phi + std::asin(c[n]*std::sin(phi)/a[n]));
-    sn = std::sin(phi);
-    cn = std::cos(phi);
+    // K(m_N) = (pi/2)(1 + m_N/4 + O(m_N^2)) (DLMF 19.5.1).
+    z /= 1.0 + 0.25*modulus[levels]*modulus[levels];
+    double s = std::sin(z), c = std::cos(z);
+    double d = std::sqrt(1.0 - modulus[levels]*modulus[levels]*s*s);
+    for (int n = levels; n > 0; n--) {
+        double k = modulus[n];
+        double denominator = 1.0 + k*s*s;
+        double nextS = (1.0 + k)*s/denominator;
+        c = c*d/denominator;
+        s = nextS;
+        d = std::sqrt(complement[n - 1]*complement[n - 1] + modulus[n - 1]*modulus[n - 1]*c*c);
+    }
+    // Put (sn, cn) back on the unit circle; a common factor keeps the relative accuracy of each.
+    double radius = std::sqrt(s*s + c*c);
+    sn = s/radius;
+    cn = c/radius;
     dn = std::sqrt(m1 + m*cn*cn);
 }
 

@@ -94,9 +94,9 @@ private:
     void validate(const Vector3& moments, const Vector3& omega, const Matrix3& attitude) const;
     void classify();
     void initializeAsymmetric(Representation requested);
-    void initializeThetaSeries();
-    void initializeEllipticIntegral();
-    double precessionAngleIntegral(double u, double sn, double cn, double dn) const;
+    void initializeThetaSeries(double& sn0, double& cn0, double& dn0);
+    void initializeEllipticIntegral(double& sn0, double& cn0, double& dn0);
+    double precessionAngleExcess(double u, double sn, double cn, double dn) const;
     void thetaSeries(double u, double& sn, double& cn, double& dn, double& re, double& im) const;
     Matrix3 bodyToInvariantFrame(const Vector3& internalOmega) const;
 
@@ -121,12 +121,12 @@ private:
     double cr[maxThetaTerms], ci[maxThetaTerms];  // complex theta_1 coefficients
     double oddPowers[maxThetaTerms], evenPowers[maxThetaTerms];  // q^{n(n+1)} and q^{n^2}
     double snScale, cnScale, dnScale;
-    double cosPhase1, sinPhase1, phase2;   // cos A1, sin A1 and A2
+    double cosPhase1, sinPhase1, phase2 = 0.0;   // cos A1, sin A1 and A2
     // Elliptic integral of the third kind.
     double characteristic;   // n
-    double halfPeriodIntegral;  // Pi(n|m), the increase of the integral over a half period 2K of u
+    double halfPeriodExcess;    // Pi(n|m) - K, the growth of the excess over a half period 2K of u
     double integralPrefactor;   // L (I3 - I1) / (I1 I3 wp)
-    double integralAtStart;     // the integral at u = epsilon
+    double integralAtStart;     // the excess at u = epsilon
 };
 
 inline FreeRotor::FreeRotor(const Vector3& moments, const Vector3& omega, const Matrix3& attitude,
@@ -213,10 +213,16 @@ inline void FreeRotor::initializeAsymmetric(Representation requested) {
     }
     std::array<int, 3> cyclic = {(middle + 2)%3, middle, (middle + 1)%3};
     const double ix = moments[cyclic[0]], iy = moments[cyclic[1]], iz = moments[cyclic[2]];
+    // Everything below is computed for omega / 2^e with 2^e near max|omega_k| (so that no square
+    // underflows or overflows, and the division is exact), and the quantities with units of
+    // frequency are scaled back at the end.
+    int exponent;
+    std::frexp(std::max({std::fabs(omega0[0]), std::fabs(omega0[1]), std::fabs(omega0[2])}), &exponent);
+    const double scale = std::ldexp(1.0, exponent);
     // 2E Iy - L^2 = sum_k I_k w_k^2 (Iy - I_k), free of the cancellation of the difference.
     double twoEIyMinusL2 = 0.0;
     for (int k = 0; k < 3; k++)
-        twoEIyMinusL2 += moments[k]*omega0[k]*omega0[k]*(iy - moments[k]);
+        twoEIyMinusL2 += moments[k]*(omega0[k]/scale)*(omega0[k]/scale)*(iy - moments[k]);
     bool flip = (twoEIyMinusL2 > 0.0 && ix < iz) || (twoEIyMinusL2 < 0.0 && ix > iz);
     if (flip) {
         axisOf = {cyclic[2], cyclic[1], cyclic[0]};
@@ -229,7 +235,7 @@ inline void FreeRotor::initializeAsymmetric(Representation requested) {
     double w0[3];
     for (int j = 0; j < 3; j++) {
         internalMoments[j] = moments[axisOf[j]];
-        w0[j] = axisSign[j]*omega0[axisOf[j]];
+        w0[j] = axisSign[j]*omega0[axisOf[j]]/scale;
     }
     const double i1 = internalMoments[0], i2 = internalMoments[1], i3 = internalMoments[2];
     // L^2 - 2E I_j = sum_k I_k w_k^2 (I_k - I_j) (notes: "Where the formulas are delicate").
@@ -254,34 +260,55 @@ inline void FreeRotor::initializeAsymmetric(Representation requested) {
     for (int k = 0; k < 3; k++)
         l2MinusTwoEI2 += internalMoments[k]*w0[k]*w0[k]*(internalMoments[k] - i2);
     m1 = std::clamp(l2MinusTwoEI2*(i3 - i1)/denominator, 0.0, 1.0);
+    if (!(m > 0.0) || w1m == 0.0) {
+        // L along axis 3 to within the range of doubles: the precession amplitude is below
+        // 1e-300 |omega|, and the uniform rotation is exact to that level.
+        steady = true;
+        m = 0.0;
+        return;
+    }
     quarterPeriod = Special::ellipticK(m, m1);
 
     // The initial argument: sn(eps) = w2/w2m, cn(eps) = w1/w1m, dn(eps) = w3/w3m (vZS eq. (3.42)),
     // with all three ratios used so that eps keeps full precision near the turning points.
+    // sn0, cn0 and dn0 are then replaced by the values the chosen representation gives at eps.
     double sn0 = std::clamp(w0[1]/w2m, -1.0, 1.0);
     double cn0 = std::clamp(w0[0]/w1m, 0.0, 1.0);
     double dn0 = std::clamp(w0[2]/w3m, 0.0, 1.0);
+    if (cn0*cn0 == 0.0 && dn0*dn0 == 0.0) {
+        // omega along the middle axis to within the range of doubles: the unstable steady rotation.
+        steady = true;
+        return;
+    }
     epsilon = Special::ellipticFFromJacobi(sn0, cn0*cn0, dn0*dn0);
-
-    // B = T1'(omega(0))^T Q A(0) (notes, initialization step 4).
-    Matrix3 qa;
-    for (int j = 0; j < 3; j++)
-        for (int c = 0; c < 3; c++)
-            qa[j][c] = axisSign[j]*attitude0[axisOf[j]][c];
-    b = multiplyTransposed(bodyToInvariantFrame({w0[0], w0[1], w0[2]}), qa);
 
     if (requested == Automatic)
         requested = (m <= 0.9 ? ThetaSeries : EllipticIntegral);
     if (requested == ThetaSeries && m1 == 0.0)
         throw std::invalid_argument("FreeRotor: the theta-series representation does not exist on the separatrix (m = 1)");
     representation = requested;
+    // Each representation evaluates sn, cn, dn at u = eps in its own way; building B from those
+    // values (rather than from the given omega) makes evolve(0) return A(0) to rounding.
     if (representation == ThetaSeries)
-        initializeThetaSeries();
+        initializeThetaSeries(sn0, cn0, dn0);
     else
-        initializeEllipticIntegral();
+        initializeEllipticIntegral(sn0, cn0, dn0);
+
+    // B = T1'(omega(0))^T Q A(0) (notes, initialization step 4).
+    Matrix3 qa;
+    for (int j = 0; j < 3; j++)
+        for (int c = 0; c < 3; c++)
+            qa[j][c] = axisSign[j]*attitude0[axisOf[j]][c];
+    b = multiplyTransposed(bodyToInvariantFrame({w1m*cn0, w2m*sn0, w3m*dn0}), qa);
+    w1m *= scale;
+    w2m *= scale;
+    w3m *= scale;
+    wp *= scale;
+    angularMomentum *= scale;
+    phase2 *= scale;
 }
 
-inline void FreeRotor::initializeThetaSeries() {
+inline void FreeRotor::initializeThetaSeries(double& sn0, double& cn0, double& dn0) {
     const double i1 = internalMoments[0], i3 = internalMoments[2];
     const double kComplement = Special::ellipticK(m1, m);
     const double logNome = -M_PI*kComplement/quarterPeriod;  // ln q, q = exp(-pi K'/K)
@@ -357,8 +384,8 @@ inline void FreeRotor::initializeThetaSeries() {
     }
     const double cothX = (grow + 1.0)/(expm1x*(2.0 + expm1x));  // (e^{2x} + 1)/(e^{2x} - 1)
     phase2 = angularMomentum/i1 + thetaScale*wp*(cothX - 2.0*sum);
-    double sn, cn, dn, re, im;
-    thetaSeries(epsilon, sn, cn, dn, re, im);
+    double re, im;
+    thetaSeries(epsilon, sn0, cn0, dn0, re, im);
     // A1 = arg theta_1(eps) (vZS eq. (4.5)); only its cosine and sine are needed.
     double size = std::sqrt(re*re + im*im);
     cosPhase1 = re/size;
@@ -401,24 +428,33 @@ inline void FreeRotor::thetaSeries(double u, double& sn, double& cn, double& dn,
     dn = dnScale*theta3/theta4;
 }
 
-inline void FreeRotor::initializeEllipticIntegral() {
+inline void FreeRotor::initializeEllipticIntegral(double& sn0, double& cn0, double& dn0) {
     const double i1 = internalMoments[0], i2 = internalMoments[1], i3 = internalMoments[2];
     characteristic = -i3*(i2 - i1)/(i1*(i3 - i2));
     integralPrefactor = angularMomentum*(i3 - i1)/(i1*i3*wp);
-    halfPeriodIntegral = (m1 == 0.0 ? 0.0 : Special::ellipticPiFromJacobi(characteristic, 1.0, 0.0, m1));
-    double sn, cn, dn;
-    Special::jacobiElliptic(epsilon, m, m1, sn, cn, dn);
-    integralAtStart = precessionAngleIntegral(epsilon, sn, cn, dn);
+    // The excess of Pi(n|m) over K over a half period: (n/3) RJ(0, m1, 1, 1 - n) (DLMF 19.25.2 with DLMF 19.25.14).
+    halfPeriodExcess = (m1 == 0.0 ? 0.0 : characteristic/3.0*Special::carlsonRJ(0.0, m1, 1.0, 1.0 - characteristic));
+    Special::jacobiElliptic(epsilon, m, m1, sn0, cn0, dn0);
+    integralAtStart = precessionAngleExcess(epsilon, sn0, cn0, dn0);
 }
 
 /**
- * int_0^u du' / (1 - n sn^2(u')) for any real u: reduce u = 2K j + r with |r| <= K, then the
- * integral is 2 j Pi(n|m) + Pi(n; am(r)|m), and sn(r) = (-1)^j sn(u), cn(r) = (-1)^j cn(u).
+ * The part of int_0^u du' / (1 - n sn^2(u')) beyond u itself, for any real u. Since the
+ * RF term of Pi(n; am(u)|m) is exactly u on [-K, K] (DLMF 19.25.5), only the RJ term remains:
+ * reduce u = 2K j + r with |r| <= K; the excess is 2 j (n/3) RJ(0, m1, 1, 1 - n) plus
+ * (n/3) sn^3(r) RJ(cn^2, dn^2, 1, 1 - n sn^2) (DLMF 19.25.14), and sn(r) = (-1)^j sn(u).
+ * On the separatrix (m = 1, K infinite) the integral is elementary: with nu = -n,
+ * int_0^u du' / (1 + nu tanh^2 u') = (u + sqrt(nu) atan(sqrt(nu) tanh u)) / (1 + nu).
  */
-inline double FreeRotor::precessionAngleIntegral(double u, double sn, double cn, double dn) const {
-    double halfPeriods = (m1 == 0.0 ? 0.0 : std::nearbyint(u/(2.0*quarterPeriod)));
-    double parity = (std::fmod(halfPeriods, 2.0) == 0.0 ? 1.0 : -1.0);
-    return 2.0*halfPeriods*halfPeriodIntegral + Special::ellipticPiFromJacobi(characteristic, parity*sn, cn*cn, dn*dn);
+inline double FreeRotor::precessionAngleExcess(double u, double sn, double cn, double dn) const {
+    const double n = characteristic;
+    if (m1 == 0.0) {
+        double nu = -n, root = std::sqrt(nu);
+        return (root*std::atan(root*sn) - nu*u)/(1.0 + nu);
+    }
+    double halfPeriods = std::nearbyint(u/(2.0*quarterPeriod));
+    double r = (std::fmod(halfPeriods, 2.0) == 0.0 ? sn : -sn);
+    return 2.0*halfPeriods*halfPeriodExcess + n/3.0*r*r*r*Special::carlsonRJ(cn*cn, dn*dn, 1.0, 1.0 - n*r*r);
 }
 
 /** T1'(omega) of vZS eq. (3.13): its columns are e1, e2 and L/|L| in the internal body frame. */
@@ -464,8 +500,8 @@ inline void FreeRotor::evolve(double t, Vector3& omega, Matrix3& attitude) const
     }
     else {
         Special::jacobiElliptic(u, m, m1, sn, cn, dn);
-        const double i3 = internalMoments[2];
-        double psi = angularMomentum/i3*t + integralPrefactor*(precessionAngleIntegral(u, sn, cn, dn) - integralAtStart);
+        // psi = (L/I3) t + P (Pi(u) - Pi(eps)) with Pi(u) = u + excess(u) and P wp = L (I3 - I1)/(I1 I3).
+        double psi = angularMomentum/internalMoments[0]*t + integralPrefactor*(precessionAngleExcess(u, sn, cn, dn) - integralAtStart);
         cosPsi = std::cos(psi);
         sinPsi = std::sin(psi);
     }

@@ -1,0 +1,45 @@
+// The SWIG module openmmrigid._openmmrigid (proxy: openmmrigid/openmmrigid.py). Users import the
+// package openmmrigid, whose Python classes (FreeRotor, special) call into this module.
+%module(package="openmmrigid") openmmrigid
+
+%{
+#include <exception>
+#include <string>
+
+/**
+ * Raise openmm.OpenMMException with the given message, the exception an OpenMM user catches.
+ * Falls back to RuntimeError only if the openmm package itself cannot be imported.
+ */
+static void raiseOpenMMException(const std::string& message) {
+    PyObject* openmm = PyImport_ImportModule("openmm");
+    PyObject* exceptionClass = openmm == NULL ? NULL : PyObject_GetAttrString(openmm, "OpenMMException");
+    Py_XDECREF(openmm);
+    if (exceptionClass == NULL) {
+        PyErr_Clear();
+        PyErr_SetString(PyExc_RuntimeError, message.c_str());
+        return;
+    }
+    PyErr_SetString(exceptionClass, message.c_str());
+    Py_DECREF(exceptionClass);
+}
+%}
+
+// Every C++ exception (OpenMM::OpenMMException and std::invalid_argument both derive from
+// std::exception) reaches Python as openmm.OpenMMException with its message.
+%exception {
+    try {
+        $action
+    }
+    catch (const std::exception& e) {
+        raiseOpenMMException(e.what());
+        SWIG_fail;
+    }
+    catch (...) {
+        raiseOpenMMException("openmmrigid: unknown C++ exception");
+        SWIG_fail;
+    }
+}
+
+%include "swig/buffers.i"
+%include "swig/special.i"
+%include "swig/freerotor.i"

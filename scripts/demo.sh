@@ -1,0 +1,20 @@
+#!/usr/bin/env bash
+# Install openmm-rigid into .venv (created if missing) and run the free-rotor example.
+#
+#   bash scripts/demo.sh
+set -euo pipefail
+
+repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cd "$repo"
+export PIP_DISABLE_PIP_VERSION_CHECK=1 PIP_NO_INPUT=1
+
+if ! .venv/bin/python -m pip --version >/dev/null 2>&1; then
+    rm -rf .venv
+    python3 -m venv .venv || {
+        echo "error: python3 cannot create a virtual environment; install python3-venv and rerun" >&2
+        exit 1
+    }
+fi
+.venv/bin/python -m pip install --upgrade pip
+.venv/bin/python -m pip install .
+.venv/bin/python examples/free_rotor.py "$@"
