@@ -138,6 +138,8 @@ int main() {
                      makeInputs([]() { double a = uniform(1, 2); return Vector3{a, a, uniform(2.5, 3.5)}; }, anyRotor)});
     cases.push_back({"asymmetric", FreeRotor::Automatic, makeInputs(asymmetricMoments, parameterIn(0.2, 0.8))});
     cases.push_back({"asymmetric-near-separatrix", FreeRotor::Automatic, makeInputs(asymmetricMoments, parameterIn(0.95, 0.9999))});
+    cases.push_back({"asymmetric-at-separatrix", FreeRotor::Automatic, makeInputs(asymmetricMoments, parameterIn(0.99995, 1.0))});
+    cases.push_back({"asymmetric-any-m", FreeRotor::Automatic, makeInputs(asymmetricMoments, parameterIn(0.0, 1.0))});
     cases.push_back({"asymmetric-elliptic-generic", FreeRotor::EllipticIntegral, makeInputs(asymmetricMoments, parameterIn(0.2, 0.8))});
     cases.push_back({"linear", FreeRotor::Automatic,
                      makeInputs([]() { double a = uniform(1, 3); return Vector3{a, a, 0.0}; }, anyRotor)});

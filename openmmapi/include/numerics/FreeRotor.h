@@ -23,8 +23,9 @@
  *       with n = -I3 (I2 - I1) / (I1 (I3 - I2)) <= 0, so that psi is an incomplete elliptic integral of
  *       the third kind (DLMF 19.2.7), evaluated with Carlson's RF and RJ. It is valid for every m in
  *       [0, 1], the separatrix m = 1 included.
- *   Automatic takes the theta series for m <= 0.9 (at most about five terms) and the elliptic
- *   integral above.
+ *   Both are exact to rounding wherever they are defined (checked down to 1 - m = 1e-24 for the
+ *   series); Automatic takes the theta series, the cheaper one, for m <= 0.9999 (at most about
+ *   eight terms) and the elliptic integral above.
  *
  * Accuracy: omega and A to about 1e-14 relative for times of a few rotation periods; over long times
  * the phase error grows like (rotation angle) x machine epsilon, which is inherent in the rounding of t.
@@ -283,7 +284,7 @@ inline void FreeRotor::initializeAsymmetric(Representation requested) {
     epsilon = Special::ellipticFFromJacobi(sn0, cn0*cn0, dn0*dn0);
 
     if (requested == Automatic)
-        requested = (m <= 0.9 ? ThetaSeries : EllipticIntegral);
+        requested = (m <= 0.9999 ? ThetaSeries : EllipticIntegral);
     if (requested == ThetaSeries && m1 == 0.0)
         throw std::invalid_argument("FreeRotor: the theta-series representation does not exist on the separatrix (m = 1)");
     representation = requested;
