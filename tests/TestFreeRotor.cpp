@@ -523,8 +523,9 @@ void testAccessors() {
         if (m > 1.0)
             m = 1.0/m;
         assertSmall(std::fabs(rotor.getParameter() - m), 1e-13*std::max(m, 1e-300) + 1e-300, "getParameter", where, __LINE__);
-        FreeRotor::Representation automatic = (m <= 0.9 ? FreeRotor::ThetaSeries : FreeRotor::EllipticIntegral);
-        if (std::fabs(m - 0.9) > 1e-12 && rotor.getRepresentation() != automatic)
+        const double limit = FreeRotor::automaticThetaSeriesLimit;
+        FreeRotor::Representation automatic = (m <= limit ? FreeRotor::ThetaSeries : FreeRotor::EllipticIntegral);
+        if (std::fabs(m - limit) > 1e-12 && rotor.getRepresentation() != automatic)
             throwException(__FILE__, __LINE__, "unexpected automatic representation for " + where);
     }
     ASSERT_EQUAL(std::string("linear"), std::string(FreeRotor::kindName(FreeRotor::Linear)));

@@ -46,6 +46,8 @@ class FreeRotor {
 public:
     enum Kind { Linear = 0, Spherical = 1, Symmetric = 2, Asymmetric = 3 };
     enum Representation { Automatic = 0, ThetaSeries = 1, EllipticIntegral = 2 };
+    /** Automatic uses the theta series up to this elliptic parameter m, the elliptic integral above. */
+    static constexpr double automaticThetaSeriesLimit = 0.9999;
 
     /**
      * Create the rotor from its initial state.
@@ -284,7 +286,7 @@ inline void FreeRotor::initializeAsymmetric(Representation requested) {
     epsilon = Special::ellipticFFromJacobi(sn0, cn0*cn0, dn0*dn0);
 
     if (requested == Automatic)
-        requested = (m <= 0.9999 ? ThetaSeries : EllipticIntegral);
+        requested = (m <= automaticThetaSeriesLimit ? ThetaSeries : EllipticIntegral);
     if (requested == ThetaSeries && m1 == 0.0)
         throw std::invalid_argument("FreeRotor: the theta-series representation does not exist on the separatrix (m = 1)");
     representation = requested;
