@@ -1,0 +1,156 @@
+#ifndef OPENMMRIGID_RIGIDBODYINTEGRATOR_H_
+#define OPENMMRIGID_RIGIDBODYINTEGRATOR_H_
+
+#include "openmm/Integrator.h"
+#include "openmm/Kernel.h"
+#include "internal/windowsExportRigid.h"
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+namespace OpenMMRigid {
+
+class IntegrateRigidBodyStepKernel;
+struct RigidBody;
+
+/**
+ * This is an Integrator for systems of rigid molecules. Each rigid body moves by a symplectic,
+ * time-reversible splitting: a half kick of its linear and angular momentum by the forces and
+ * torques, a free drift of its centre and orientation, and another half kick. With the default
+ * rotation method (Exact) the drift is the exact torque-free motion of the body (R. van Zon and
+ * J. Schofield, J. Comput. Phys. 225, 145 (2007); J. Chem. Phys. 128, 154119 (2008)); NoSquish
+ * takes the symplectic rotational splitting of T. F. Miller et al., J. Chem. Phys. 116, 8649 (2002)
+ * instead, for comparison. Particles that belong to no body move by velocity Verlet, with the
+ * constraints among them applied to positions and velocities.
+ *
+ * The bodies are either found in the System when the Context is created (every cluster of three or
+ * more particles that its constraints hold rigid: the rigid waters of TIP3P, SPC/E, TIP4P-Ew and
+ * TIP5P, or any other rigid constraint cluster), or given explicitly as lists of particle indices.
+ * A body held rigid by constraints takes its shape from the constraint distances, so its motion is
+ * that of the constrained system; an explicit body takes the shape it has when the Context's
+ * positions are first set. Constraints within a body are implied by its rigidity; a constraint
+ * joining a body to anything else is an error. Massless virtual sites are placed from their
+ * parents after every move.
+ *
+ * Velocities are on-step. Every step writes the velocity v = V + omega x (r - R) of each body
+ * particle back to the Context, so that reporters, State objects and barostats see consistent data.
+ * Positions or velocities set from outside (setPositions, setVelocities, setVelocitiesToTemperature,
+ * loadCheckpoint, a Monte Carlo barostat move) are projected onto rigid-body motion the next time
+ * the integrator runs: each body is re-fitted by a mass-weighted least-squares rigid fit, and its
+ * particle velocities are replaced by the rigid motion with the same linear and angular momentum.
+ */
+class OPENMM_EXPORT_RIGID RigidBodyIntegrator : public OpenMM::Integrator {
+public:
+    /** How the orientation of each body is advanced during the free drift. */
+    enum RotationMethod {
+        /** The exact torque-free motion (van Zon and Schofield, 2007). */
+        Exact = 0,
+        /** The symplectic NO_SQUISH splitting of the free rotation (Miller et al., 2002). */
+        NoSquish = 1
+    };
+    /**
+     * Create a RigidBodyIntegrator whose bodies are the rigid constraint clusters of the System.
+     *
+     * @param stepSize  the step size with which to integrate the system, measured in ps
+     */
+    explicit RigidBodyIntegrator(double stepSize);
+    /**
+     * Create a RigidBodyIntegrator with explicitly chosen bodies.
+     *
+     * @param stepSize  the step size with which to integrate the system, measured in ps
+     * @param bodies    the particle indices of each body. A body may be any set of massive particles
+     *                  (a single particle, a linear, planar or three-dimensional molecule).
+     *                  Particles in no body move freely.
+     */
+    RigidBodyIntegrator(double stepSize, const std::vector<std::vector<int> >& bodies);
+    /** Get the method used to advance the orientation of each body. */
+    RotationMethod getRotationMethod() const {
+        return rotationMethod;
+    }
+    /**
+     * Set the method used to advance the orientation of each body.
+     *
+     * @throws OpenMMException if the value is not a RotationMethod
+     */
+    void setRotationMethod(RotationMethod method);
+    /** Get whether the bodies were given explicitly (rather than found from the System's constraints). */
+    bool hasExplicitBodies() const {
+        return explicitBodies;
+    }
+    /** Get the explicit bodies passed to the constructor (empty when they are found from the System). */
+    const std::vector<std::vector<int> >& getExplicitBodies() const {
+        return bodies;
+    }
+    /**
+     * Get the number of rigid bodies. Only available once the integrator is bound to a Context.
+     */
+    int getNumBodies() const;
+    /**
+     * Get the particle indices of a rigid body. Only available once the integrator is bound to a Context.
+     *
+     * @param index  the index of the body, from 0 to getNumBodies() - 1
+     */
+    std::vector<int> getBodyParticles(int index) const;
+    /**
+     * Get the kind of a rigid body: "point" (one particle: translation only), "linear" (two rotational
+     * degrees of freedom), "spherical", "symmetric" or "asymmetric" (by its principal moments).
+     * Only available once the integrator is bound to a Context; for an explicit body, once positions
+     * have been set.
+     *
+     * @param index  the index of the body, from 0 to getNumBodies() - 1
+     */
+    std::string getBodyKind(int index) const;
+    /**
+     * Get the principal moments of inertia of a rigid body, in amu nm^2, in ascending order.
+     *
+     * @param index  the index of the body, from 0 to getNumBodies() - 1
+     */
+    std::vector<double> getBodyMoments(int index) const;
+    /**
+     * Get the kinetic energy of the translation of the bodies' centres of mass plus that of the free
+     * particles, measured in kJ/mol. Only available once the integrator is bound to a Context.
+     */
+    double getTranslationalKineticEnergy();
+    /**
+     * Get the kinetic energy of the rotation of the bodies about their centres of mass, measured in kJ/mol.
+     * Only available once the integrator is bound to a Context.
+     */
+    double getRotationalKineticEnergy();
+    /**
+     * Get the number of degrees of freedom of the system as this integrator moves it: 3 per free
+     * particle, less one per constraint among free particles, plus 3 translational and 0 (point),
+     * 2 (linear) or 3 rotational ones per body, less 3 if the System has a CMMotionRemover. With it,
+     * the temperature is 2 KE / (dof k_B). Only available once the integrator is bound to a Context.
+     */
+    int getNumDegreesOfFreedom() const;
+    /**
+     * Advance a simulation through time by taking a series of time steps.
+     *
+     * @param steps   the number of time steps to take
+     */
+    void step(int steps);
+protected:
+    void initialize(OpenMM::ContextImpl& context);
+    void cleanup();
+    std::vector<std::string> getKernelNames();
+    void stateChanged(OpenMM::State::DataType changed);
+    double computeKineticEnergy();
+    bool kineticEnergyRequiresForce() const {
+        return false;
+    }
+    void createCheckpoint(std::ostream& stream) const;
+    void loadCheckpoint(std::istream& stream);
+private:
+    const IntegrateRigidBodyStepKernel& getKernel() const;
+    IntegrateRigidBodyStepKernel& getKernel();
+    const RigidBody& getShapedBody(int index) const;
+    std::vector<std::vector<int> > bodies;
+    bool explicitBodies;
+    RotationMethod rotationMethod;
+    bool bound, forcesAreValid, needsProjection;
+    OpenMM::Kernel kernel;
+};
+
+} // namespace OpenMMRigid
+
+#endif /*OPENMMRIGID_RIGIDBODYINTEGRATOR_H_*/

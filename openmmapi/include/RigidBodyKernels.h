@@ -1,0 +1,61 @@
+#ifndef OPENMMRIGID_RIGIDBODYKERNELS_H_
+#define OPENMMRIGID_RIGIDBODYKERNELS_H_
+
+#include "RigidBodyIntegrator.h"
+#include "openmm/KernelImpl.h"
+#include "openmm/System.h"
+#include "openmm/internal/ContextImpl.h"
+#include <string>
+#include <vector>
+
+namespace OpenMMRigid {
+
+class RigidBodySystem;
+
+/**
+ * This kernel is invoked by RigidBodyIntegrator to take one time step, and to answer questions about
+ * the bodies and their kinetic energy.
+ */
+class IntegrateRigidBodyStepKernel : public OpenMM::KernelImpl {
+public:
+    static std::string Name() {
+        return "IntegrateRigidBodyStep";
+    }
+    IntegrateRigidBodyStepKernel(std::string name, const OpenMM::Platform& platform) : OpenMM::KernelImpl(name, platform) {
+    }
+    /**
+     * Initialize the kernel: find the bodies and check the System against them.
+     *
+     * @param context     the context the integrator is bound to
+     * @param integrator  the RigidBodyIntegrator this kernel is used for
+     */
+    virtual void initialize(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) = 0;
+    /**
+     * Execute the kernel: one step (half kick, drift, forces, half kick). On entry the context holds
+     * the forces at the current positions, and the bodies agree with them (see project()).
+     *
+     * @param context     the context in which to execute this kernel
+     * @param integrator  the RigidBodyIntegrator this kernel is being used for
+     */
+    virtual void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) = 0;
+    /**
+     * Re-fit the bodies to the context's positions, project its velocities onto rigid motion, and
+     * place the virtual sites. Called when positions changed from outside the integrator.
+     */
+    virtual void project(OpenMM::ContextImpl& context) = 0;
+    /**
+     * Compute the kinetic energy, sum m v^2 / 2 over the massive particles.
+     */
+    virtual double computeKineticEnergy(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) = 0;
+    /**
+     * Split the kinetic energy of the bodies and free particles into translation (centres of mass and
+     * free particles) and rotation (about the centres of mass).
+     */
+    virtual void computeKineticEnergies(OpenMM::ContextImpl& context, double& translational, double& rotational) = 0;
+    /** The bodies, as found when the kernel was initialized. */
+    virtual const RigidBodySystem& getBodies() const = 0;
+};
+
+} // namespace OpenMMRigid
+
+#endif /*OPENMMRIGID_RIGIDBODYKERNELS_H_*/

@@ -1,0 +1,286 @@
+#include "internal/RigidBodyDynamics.h"
+#include "numerics/FreeRotor.h"
+#include "numerics/NoSquish.h"
+#include "numerics/SymmetricEigen.h"
+#include "openmm/OpenMMException.h"
+#include "openmm/internal/ThreadPool.h"
+#include "openmm/reference/ReferenceConstraints.h"
+#include <cmath>
+#include <string>
+
+using namespace OpenMM;
+using namespace std;
+
+namespace OpenMMRigid {
+
+namespace {
+
+Vector3 toVector(const Vec3& v) {
+    return {v[0], v[1], v[2]};
+}
+
+Vec3 toVec3(const Vector3& v) {
+    return Vec3(v[0], v[1], v[2]);
+}
+
+/** The body-frame angular velocity I^-1 L; a zero moment (the axis of a linear body) carries none. */
+Vector3 bodyAngularVelocity(const RigidBody& body, const Vector3& bodyAngularMomentum) {
+    Vector3 omega;
+    for (int k = 0; k < 3; k++)
+        omega[k] = (body.moments[k] > 0.0 ? bodyAngularMomentum[k]/body.moments[k] : 0.0);
+    return omega;
+}
+
+/** One Newton-Schulz step towards the nearest rotation, A (3 - A^T A) / 2: removes the rounding drift. */
+void reorthonormalize(Matrix3& a) {
+    Matrix3 g = multiplyTransposed(a, a);
+    Matrix3 correction;
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            correction[i][j] = 0.5*((i == j ? 3.0 : 0.0) - g[i][j]);
+    a = multiply(a, correction);
+}
+
+} // namespace
+
+RigidBodyDynamics::RigidBodyDynamics(RigidBodySystem& system) : system(system), threads(NULL), fitted(false) {
+    states.resize(system.getBodies().size());
+    const vector<double>& masses = system.getMasses();
+    inverseMasses.resize(masses.size());
+    for (size_t i = 0; i < masses.size(); i++)
+        inverseMasses[i] = (masses[i] == 0.0 ? 0.0 : 1.0/masses[i]);
+    if (system.getFreeConstraintSystem() != NULL)
+        constraints.reset(new ReferenceConstraints(*system.getFreeConstraintSystem()));
+}
+
+RigidBodyDynamics::~RigidBodyDynamics() {
+}
+
+void RigidBodyDynamics::setThreadPool(ThreadPool* pool) {
+    threads = pool;
+}
+
+void RigidBodyDynamics::forEachBody(const function<void(int)>& task) {
+    const int numBodies = states.size();
+    if (threads == NULL || threads->getNumThreads() < 2 || numBodies < 64) {
+        for (int b = 0; b < numBodies; b++)
+            task(b);
+        return;
+    }
+    threads->execute([&](ThreadPool& pool, int thread) {
+        int begin = (numBodies*(long long) thread)/pool.getNumThreads();
+        int end = (numBodies*(long long) (thread + 1))/pool.getNumThreads();
+        for (int b = begin; b < end; b++)
+            task(b);
+    });
+    threads->waitForThreads();
+}
+
+void RigidBodyDynamics::ensureShapes(const vector<Vec3>& positions) {
+    vector<RigidBody>& bodies = system.getBodies();
+    for (size_t b = 0; b < bodies.size(); b++) {
+        RigidBody& body = bodies[b];
+        if (body.shapeKnown)
+            continue;
+        const int n = body.particles.size();
+        Vector3 center = {0.0, 0.0, 0.0};
+        for (int i = 0; i < n; i++) {
+            const Vec3& r = positions[body.particles[i]];
+            if (!(isfinite(r[0]) && isfinite(r[1]) && isfinite(r[2])))
+                throw OpenMMException("RigidBodyIntegrator: particle " + to_string(body.particles[i]) + " of body " +
+                        to_string(b) + " has a non-finite position");
+            for (int k = 0; k < 3; k++)
+                center[k] += body.masses[i]*r[k]/body.mass;
+        }
+        vector<Vector3> centred(n);
+        bool spread = (n == 1);
+        for (int i = 0; i < n; i++) {
+            for (int k = 0; k < 3; k++)
+                centred[i][k] = positions[body.particles[i]][k] - center[k];
+            spread = spread || positions[body.particles[i]] != positions[body.particles[0]];
+        }
+        if (!spread)
+            throw OpenMMException("RigidBodyIntegrator: the particles of body " + to_string(b) + " all sit at one point; "
+                    "an explicit body takes its shape from the positions, so set them before using the body");
+        body.setShape(centred);
+    }
+}
+
+void RigidBodyDynamics::project(vector<Vec3>& positions, vector<Vec3>& velocities) {
+    ensureShapes(positions);
+    for (size_t b = 0; b < states.size(); b++)
+        fitBody(b, positions, velocities);
+    fitted = true;
+}
+
+void RigidBodyDynamics::fitBody(int index, vector<Vec3>& positions, vector<Vec3>& velocities) {
+    RigidBody& body = system.getBodies()[index];
+    BodyState& state = states[index];
+    const int n = body.particles.size();
+    Vector3 center = {0.0, 0.0, 0.0}, velocity = {0.0, 0.0, 0.0};
+    for (int i = 0; i < n; i++) {
+        const Vec3& r = positions[body.particles[i]];
+        const Vec3& v = velocities[body.particles[i]];
+        if (!(isfinite(r[0]) && isfinite(r[1]) && isfinite(r[2])))
+            throw OpenMMException("RigidBodyIntegrator: particle " + to_string(body.particles[i]) + " of body " +
+                    to_string(index) + " has a non-finite position");
+        if (!(isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2])))
+            throw OpenMMException("RigidBodyIntegrator: particle " + to_string(body.particles[i]) + " of body " +
+                    to_string(index) + " has a non-finite velocity");
+        for (int k = 0; k < 3; k++) {
+            center[k] += body.masses[i]*r[k]/body.mass;
+            velocity[k] += body.masses[i]*v[k]/body.mass;
+        }
+    }
+    vector<Vector3> centred(n);
+    for (int i = 0; i < n; i++)
+        for (int k = 0; k < 3; k++)
+            centred[i][k] = positions[body.particles[i]][k] - center[k];
+    Matrix3 rotation = identityMatrix();  // body to lab
+    if (body.kind != RigidBody::Point) {
+        double residual;
+        rotation = bestFitRotation(body.bodyCoordinates, centred, body.masses, residual);
+        if (body.handednessOpen) {
+            vector<Vector3> mirrored = body.bodyCoordinates;
+            for (Vector3& x : mirrored)
+                x[2] = -x[2];
+            double mirroredResidual;
+            Matrix3 mirroredRotation = bestFitRotation(mirrored, centred, body.masses, mirroredResidual);
+            if (mirroredResidual < residual) {
+                body.bodyCoordinates = mirrored;
+                rotation = mirroredRotation;
+            }
+            body.handednessOpen = false;
+        }
+    }
+    state.center = center;
+    state.attitude = transpose(rotation);
+    state.velocity = velocity;
+    // Rigid positions, and the angular momentum of the velocities about the fitted shape.
+    Vector3 angularMomentum = {0.0, 0.0, 0.0};
+    vector<Vector3> arms(n);
+    for (int i = 0; i < n; i++) {
+        arms[i] = multiply(rotation, body.bodyCoordinates[i]);
+        Vector3 relative = toVector(velocities[body.particles[i]] - toVec3(velocity));
+        Vector3 moment = cross(arms[i], relative);
+        for (int k = 0; k < 3; k++)
+            angularMomentum[k] += body.masses[i]*moment[k];
+        positions[body.particles[i]] = toVec3(center) + toVec3(arms[i]);
+    }
+    state.angularMomentum = angularMomentum;
+    Vector3 omega = multiplyTransposed(state.attitude, bodyAngularVelocity(body, multiply(state.attitude, angularMomentum)));
+    for (int i = 0; i < n; i++)
+        velocities[body.particles[i]] = toVec3(velocity) + toVec3(cross(omega, arms[i]));
+}
+
+Vector3 RigidBodyDynamics::rotate(const RigidBody& body, BodyState& state, double dt, RigidBodyIntegrator::RotationMethod method) const {
+    Vector3 bodyMomentum = multiply(state.attitude, state.angularMomentum);
+    if (body.kind == RigidBody::Point)
+        return bodyMomentum;
+    if (method == RigidBodyIntegrator::NoSquish)
+        noSquishRotate(body.moments, dt, state.attitude, bodyMomentum);
+    else {
+        FreeRotor rotor(body.moments, bodyAngularVelocity(body, bodyMomentum), state.attitude);
+        Vector3 omega;
+        rotor.evolve(dt, omega, state.attitude);
+    }
+    reorthonormalize(state.attitude);
+    return bodyMomentum;
+}
+
+void RigidBodyDynamics::firstHalf(vector<Vec3>& positions, vector<Vec3>& velocities, const vector<Vec3>& forces,
+                                  double dt, RigidBodyIntegrator::RotationMethod method, double constraintTolerance) {
+    const vector<RigidBody>& bodies = system.getBodies();
+    forEachBody([&](int b) {
+        const RigidBody& body = bodies[b];
+        BodyState& state = states[b];
+        // Momenta from the particle velocities, so that anything that changed them since the last step
+        // (a CMMotionRemover, setVelocities) is taken into account; for rigid velocities they agree with
+        // the state to rounding.
+        const int n = body.particles.size();
+        Vec3 momentum, force, angularMomentum, torque;
+        for (int i = 0; i < n; i++)
+            momentum += velocities[body.particles[i]]*body.masses[i];
+        Vec3 velocity = momentum/body.mass;
+        for (int i = 0; i < n; i++) {
+            int p = body.particles[i];
+            Vec3 arm = positions[p] - toVec3(state.center);
+            angularMomentum += arm.cross(velocities[p] - velocity)*body.masses[i];
+            force += forces[p];
+            torque += arm.cross(forces[p]);
+        }
+        // Half kick, then the free drift: translation and rotation.
+        velocity += force*(0.5*dt/body.mass);
+        angularMomentum += torque*(0.5*dt);
+        state.velocity = toVector(velocity);
+        state.angularMomentum = toVector(angularMomentum);
+        for (int k = 0; k < 3; k++)
+            state.center[k] += dt*velocity[k];
+        rotate(body, state, dt, method);
+        for (int i = 0; i < n; i++)
+            positions[body.particles[i]] = toVec3(state.center) + toVec3(multiplyTransposed(state.attitude, body.bodyCoordinates[i]));
+    });
+    const vector<int>& free = system.getFreeParticles();
+    if (constraints)
+        previousPositions = positions;
+    for (int p : free) {
+        velocities[p] += forces[p]*(0.5*dt*inverseMasses[p]);
+        positions[p] += velocities[p]*dt;
+    }
+    if (constraints) {
+        constraints->apply(previousPositions, positions, inverseMasses, constraintTolerance);
+        for (int p : free)
+            velocities[p] = (positions[p] - previousPositions[p])/dt;
+    }
+}
+
+void RigidBodyDynamics::secondHalf(vector<Vec3>& positions, vector<Vec3>& velocities, const vector<Vec3>& forces,
+                                   double dt, double constraintTolerance) {
+    const vector<RigidBody>& bodies = system.getBodies();
+    forEachBody([&](int b) {
+        const RigidBody& body = bodies[b];
+        BodyState& state = states[b];
+        const int n = body.particles.size();
+        Vec3 force, torque;
+        for (int i = 0; i < n; i++) {
+            int p = body.particles[i];
+            force += forces[p];
+            torque += (positions[p] - toVec3(state.center)).cross(forces[p]);
+        }
+        for (int k = 0; k < 3; k++) {
+            state.velocity[k] += 0.5*dt*force[k]/body.mass;
+            state.angularMomentum[k] += 0.5*dt*torque[k];
+        }
+        Vector3 omega = multiplyTransposed(state.attitude,
+                bodyAngularVelocity(body, multiply(state.attitude, state.angularMomentum)));
+        for (int i = 0; i < n; i++) {
+            int p = body.particles[i];
+            velocities[p] = toVec3(state.velocity) + toVec3(omega).cross(positions[p] - toVec3(state.center));
+        }
+    });
+    for (int p : system.getFreeParticles())
+        velocities[p] += forces[p]*(0.5*dt*inverseMasses[p]);
+    if (constraints)
+        constraints->applyToVelocities(positions, velocities, inverseMasses, constraintTolerance);
+}
+
+void RigidBodyDynamics::computeKineticEnergies(const vector<Vec3>& velocities, double& translational, double& rotational) const {
+    translational = 0.0;
+    rotational = 0.0;
+    for (const RigidBody& body : system.getBodies()) {
+        Vec3 momentum;
+        for (size_t i = 0; i < body.particles.size(); i++)
+            momentum += velocities[body.particles[i]]*body.masses[i];
+        Vec3 velocity = momentum/body.mass;
+        translational += 0.5*body.mass*velocity.dot(velocity);
+        for (size_t i = 0; i < body.particles.size(); i++) {
+            Vec3 relative = velocities[body.particles[i]] - velocity;
+            rotational += 0.5*body.masses[i]*relative.dot(relative);
+        }
+    }
+    const vector<double>& masses = system.getMasses();
+    for (int p : system.getFreeParticles())
+        translational += 0.5*masses[p]*velocities[p].dot(velocities[p]);
+}
+
+} // namespace OpenMMRigid
