@@ -1,5 +1,6 @@
 // The SWIG module openmmrigid._openmmrigid (proxy: openmmrigid/openmmrigid.py). Users import the
-// package openmmrigid, whose Python classes (FreeRotor, special) call into this module.
+// package openmmrigid, whose Python classes (FreeRotor, special) call into this module; RigidBodyIntegrator is
+// the proxy class defined here (swig/rigidbodyintegrator.i), re-exported by the package.
 %module(package="openmmrigid") openmmrigid
 
 %{
@@ -43,3 +44,4 @@ static void raiseOpenMMException(const std::string& message) {
 %include "swig/buffers.i"
 %include "swig/special.i"
 %include "swig/freerotor.i"
+%include "swig/rigidbodyintegrator.i"

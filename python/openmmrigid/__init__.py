@@ -4,8 +4,17 @@ openmm-rigid integrates rigid molecules with a symplectic, time-reversible split
 drift is the exact torque-free motion of each body (van Zon and Schofield, J. Comput. Phys. 225,
 145 (2007); J. Chem. Phys. 128, 154119 (2008)).
 
+Importing the package loads the integrator's kernels for the Reference and CPU platforms (import
+openmm first or not: openmmrigid imports it).
+
 Contents
 --------
+RigidBodyIntegrator
+    The integrator, an ``openmm.Integrator`` for ``openmm.Context`` and ``openmm.app.Simulation``.
+RigidStateDataReporter
+    An ``openmm.app.StateDataReporter`` that takes its degrees of freedom from the integrator.
+deserializeIntegrator
+    A RigidBodyIntegrator from XML (``openmm.XmlSerializer.deserialize`` does the same).
 FreeRotor
     The exact torque-free motion of a single rigid body.
 special
@@ -16,10 +25,13 @@ from importlib.metadata import PackageNotFoundError, version as _distributionVer
 
 from . import special
 from .freerotor import FreeRotor
+from .integrator import RigidBodyIntegrator, deserializeIntegrator
+from .reporters import RigidStateDataReporter
 
 try:
     __version__ = _distributionVersion("openmm-rigid")
 except PackageNotFoundError:  # imported from a source tree that was never installed
     __version__ = "unknown"
 
-__all__ = ["FreeRotor", "special", "__version__"]
+__all__ = ["RigidBodyIntegrator", "RigidStateDataReporter", "deserializeIntegrator", "FreeRotor", "special",
+           "__version__"]

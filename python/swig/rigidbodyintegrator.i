@@ -1,0 +1,428 @@
+// OpenMMRigid::RigidBodyIntegrator as a subclass of openmm.Integrator.
+//
+// OpenMM's own classes come from the openmm wheel's swig/OpenMMSwigHeaders.i, imported (not
+// included): the proxy class derives from openmm.Integrator, and SWIG's shared type table (runtime
+// version 5 in both modules) lets openmm.Context, XmlSerializer and the inherited methods
+// (getStepSize, setConstraintTolerance, setIntegrationForceGroups, ...) accept the object.
+// Units follow OpenMM's wrappers: a step size may be an openmm.unit Quantity; energies come back in
+// kJ/mol, moments in amu nm^2.
+
+// The wheel's header, written for openmm's own module, draws warnings that do not concern the classes
+// used here: nested classes (325), a member named None (314), OUTPUT typemaps it %applys from a
+// typemap file the wheel does not ship (453).
+#pragma SWIG nowarn=314,325,453
+%import(module="openmm") "swig/OpenMMSwigHeaders.i"
+%include "std_string.i"
+
+%{
+// SWIG writes the up-casts of every class in the imported hierarchy (all of openmm's Integrators and
+// Forces), so the wrapper needs their declarations, as openmm's own wrapper does.
+#include "OpenMM.h"
+#include "OpenMMAmoeba.h"
+#include "OpenMMDrude.h"
+#include "openmm/PythonForce.h"
+#include "openmm/RPMDIntegrator.h"
+#include "openmm/RPMDMonteCarloBarostat.h"
+#include "RigidBodyIntegrator.h"
+#include "openmm/serialization/XmlSerializer.h"
+#include <climits>
+#include <sstream>
+#include <vector>
+
+namespace {
+
+/** repr(object) as a std::string, for error messages; never fails. */
+std::string pythonRepr(PyObject* object) {
+    std::string text = "?";
+    PyObject* repr = PyObject_Repr(object);
+    if (repr != NULL) {
+        const char* utf8 = PyUnicode_AsUTF8(repr);
+        if (utf8 != NULL)
+            text = utf8;
+        Py_DECREF(repr);
+    }
+    PyErr_Clear();
+    return text;
+}
+
+/**
+ * Convert any iterable of iterables of integers (lists, tuples, numpy arrays of any integer dtype)
+ * to the bodies of RigidBodyIntegrator. On failure raise openmm.OpenMMException naming the body and
+ * entry and return false. Ranges are the C++ constructor's to check.
+ */
+bool bodiesFromPython(PyObject* input, std::vector<std::vector<int> >& bodies) {
+    if (PyUnicode_Check(input) || PyBytes_Check(input)) {
+        raiseOpenMMException("RigidBodyIntegrator: bodies must be a sequence of sequences of particle indices; got " +
+                             pythonRepr(input));
+        return false;
+    }
+    PyObject* outer = PySequence_Fast(input, "");
+    if (outer == NULL) {
+        PyErr_Clear();
+        raiseOpenMMException("RigidBodyIntegrator: bodies must be a sequence of sequences of particle indices; got " +
+                             pythonRepr(input));
+        return false;
+    }
+    bool ok = true;
+    Py_ssize_t numBodies = PySequence_Fast_GET_SIZE(outer);
+    bodies.assign(numBodies, std::vector<int>());
+    for (Py_ssize_t i = 0; ok && i < numBodies; i++) {
+        PyObject* body = PySequence_Fast_GET_ITEM(outer, i);
+        PyObject* inner = (PyUnicode_Check(body) || PyBytes_Check(body)) ? NULL : PySequence_Fast(body, "");
+        if (inner == NULL) {
+            PyErr_Clear();
+            raiseOpenMMException("RigidBodyIntegrator: body " + std::to_string(i) +
+                                 " must be a sequence of particle indices; got " + pythonRepr(body));
+            ok = false;
+            break;
+        }
+        Py_ssize_t size = PySequence_Fast_GET_SIZE(inner);
+        for (Py_ssize_t j = 0; j < size; j++) {
+            PyObject* entry = PySequence_Fast_GET_ITEM(inner, j);
+            // __index__ accepts Python and numpy integers and rejects floats (1.0 is not an index).
+            PyObject* index = PyNumber_Index(entry);
+            long value = index == NULL ? -1 : PyLong_AsLong(index);
+            Py_XDECREF(index);
+            if (index == NULL || PyErr_Occurred() || value < INT_MIN || value > INT_MAX) {
+                PyErr_Clear();
+                raiseOpenMMException("RigidBodyIntegrator: entry " + std::to_string(j) + " of body " + std::to_string(i) +
+                                     " is not a particle index (an int); got " + pythonRepr(entry));
+                ok = false;
+                break;
+            }
+            bodies[i].push_back(static_cast<int>(value));
+        }
+        Py_DECREF(inner);
+    }
+    Py_DECREF(outer);
+    return ok;
+}
+
+PyObject* intListToPython(const std::vector<int>& values) {
+    PyObject* list = PyList_New(values.size());
+    for (std::size_t i = 0; list != NULL && i < values.size(); i++)
+        PyList_SET_ITEM(list, i, PyLong_FromLong(values[i]));
+    return list;
+}
+
+} // namespace
+
+namespace OpenMMRigid {
+namespace Python {
+
+/** Deserialize XML written by XmlSerializer for a RigidBodyIntegrator; the caller owns the result. */
+RigidBodyIntegrator* deserializeRigidBodyIntegrator(const std::string& xml) {
+    std::istringstream stream(xml);
+    OpenMM::Integrator* integrator = OpenMM::XmlSerializer::deserialize<OpenMM::Integrator>(stream);
+    RigidBodyIntegrator* rigid = dynamic_cast<RigidBodyIntegrator*>(integrator);
+    if (rigid == NULL) {
+        delete integrator;
+        throw OpenMM::OpenMMException("deserializeIntegrator: the XML does not describe a RigidBodyIntegrator");
+    }
+    return rigid;
+}
+
+/** A copy of integrator with every setting, not bound to any Context; the caller owns it. */
+RigidBodyIntegrator* cloneRigidBodyIntegrator(const RigidBodyIntegrator& integrator) {
+    return dynamic_cast<RigidBodyIntegrator*>(OpenMM::XmlSerializer::clone<OpenMM::Integrator>(integrator));
+}
+
+/** integrator as a RigidBodyIntegrator (not a copy), or NULL if it is another kind of Integrator. */
+RigidBodyIntegrator* asRigidBodyIntegrator(OpenMM::Integrator* integrator) {
+    return dynamic_cast<RigidBodyIntegrator*>(integrator);
+}
+
+} // namespace Python
+} // namespace OpenMMRigid
+%}
+
+// ---- typemaps ----
+
+%typemap(typecheck, precedence=SWIG_TYPECHECK_POINTER) const std::vector<std::vector<int> >& bodies {
+    // Only one constructor takes a second argument: let anything through, so that the in typemap
+    // reports what is wrong with it (as openmm.OpenMMException) rather than the overload dispatcher.
+    $1 = 1;
+}
+%typemap(in) const std::vector<std::vector<int> >& bodies (std::vector<std::vector<int> > converted) {
+    if (!bodiesFromPython($input, converted))
+        SWIG_fail;
+    $1 = &converted;
+}
+%typemap(out) std::vector<int> {
+    $result = intListToPython($1);
+    if ($result == NULL)
+        SWIG_fail;
+}
+%typemap(out) const std::vector<std::vector<int> >& {
+    $result = PyList_New($1->size());
+    for (std::size_t i = 0; $result != NULL && i < $1->size(); i++) {
+        PyObject* body = intListToPython((*$1)[i]);
+        if (body == NULL) {
+            Py_CLEAR($result);
+            break;
+        }
+        PyList_SET_ITEM($result, i, body);
+    }
+    if ($result == NULL)
+        SWIG_fail;
+}
+%typemap(out) std::vector<double> {
+    $result = PyList_New($1.size());
+    for (std::size_t i = 0; $result != NULL && i < $1.size(); i++)
+        PyList_SET_ITEM($result, i, PyFloat_FromDouble(($1)[i]));
+    if ($result == NULL)
+        SWIG_fail;
+}
+// getRotationMethod returns the enum as a plain int, equal to RigidBodyIntegrator.Exact or .NoSquish.
+
+// ---- units, as OpenMM's own wrappers handle them ----
+
+%pythonbegin %{
+from openmm import unit as _unit
+import openmm as _openmm_package
+%}
+
+%pythonprepend OpenMMRigid::RigidBodyIntegrator::RigidBodyIntegrator %{
+    args = list(args)
+    if len(args) > 0 and _unit.is_quantity(args[0]):
+        args[0] = args[0].value_in_unit(_unit.picosecond)
+%}
+%pythonappend OpenMMRigid::RigidBodyIntegrator::getTranslationalKineticEnergy %{
+    val = _unit.Quantity(val, _unit.kilojoule_per_mole)
+%}
+%pythonappend OpenMMRigid::RigidBodyIntegrator::getRotationalKineticEnergy %{
+    val = _unit.Quantity(val, _unit.kilojoule_per_mole)
+%}
+%pythonappend OpenMMRigid::RigidBodyIntegrator::getBodyMoments %{
+    val = _unit.Quantity(val, _unit.amu*_unit.nanometer**2)
+%}
+
+// ---- docstrings (numpy style; the C++ header has the Doxygen originals) ----
+
+%feature("docstring") OpenMMRigid::RigidBodyIntegrator "
+An Integrator for systems of rigid molecules.
+
+Each rigid body moves by a symplectic, time-reversible splitting: a half kick of its linear and
+angular momentum by the forces and torques, a free drift of its centre and orientation, and another
+half kick. With the default rotation method (``RigidBodyIntegrator.Exact``) the drift is the exact
+torque-free motion of the body (R. van Zon and J. Schofield, J. Comput. Phys. 225, 145 (2007);
+J. Chem. Phys. 128, 154119 (2008)); ``RigidBodyIntegrator.NoSquish`` takes the symplectic splitting
+of T. F. Miller et al., J. Chem. Phys. 116, 8649 (2002) instead. Particles in no body move by
+velocity Verlet, with the constraints among them applied to positions and velocities.
+
+The bodies are either found in the System when the Context is created (every cluster of three or
+more particles that its constraints hold rigid, such as rigid water), or given explicitly as lists
+of particle indices. An explicit body takes the shape it has when the Context's positions are
+first set. Velocities are on-step; each step writes v = V + omega x (r - R) back to every body
+particle. Positions or velocities set from outside are projected onto rigid-body motion the next
+time the integrator runs.
+
+Parameters
+----------
+stepSize : float or openmm.unit.Quantity
+    The step size, in ps if a plain number.
+bodies : sequence of sequences of int, optional
+    The particle indices of each body (lists, tuples or integer numpy arrays). A body may be any
+    set of massive particles. Particles in no body move freely. Without this argument the bodies
+    are the System's rigid constraint clusters.
+
+Raises
+------
+openmm.OpenMMException
+    If bodies is not a sequence of sequences of integer particle indices, or holds a bad index.
+
+Notes
+-----
+Temperature: ``getNumDegreesOfFreedom()`` counts 3 translational and 0, 2 or 3 rotational degrees
+of freedom per body. ``openmm.app.StateDataReporter`` uses ``computeSystemTemperature()`` when an
+integrator has it, as this one does, so its temperature column is right for explicit bodies too;
+``openmmrigid.RigidStateDataReporter`` takes its degrees of freedom from the integrator as well.
+
+Examples
+--------
+>>> from openmm import unit
+>>> integrator = RigidBodyIntegrator(2*unit.femtoseconds)                   # rigid waters etc.
+>>> integrator = RigidBodyIntegrator(0.002, [[0, 1, 2], [3, 4, 5, 6]])      # explicit bodies
+>>> integrator.setRotationMethod(RigidBodyIntegrator.NoSquish)
+";
+%feature("docstring") OpenMMRigid::RigidBodyIntegrator::getRotationMethod "
+Get the method used to advance the orientation of each body.
+
+Returns
+-------
+int
+    ``RigidBodyIntegrator.Exact`` (the default) or ``RigidBodyIntegrator.NoSquish``.
+";
+%feature("docstring") OpenMMRigid::RigidBodyIntegrator::setRotationMethod "
+Set the method used to advance the orientation of each body.
+
+Parameters
+----------
+method : int
+    ``RigidBodyIntegrator.Exact`` (the exact free rotation of van Zon and Schofield) or
+    ``RigidBodyIntegrator.NoSquish`` (the NO_SQUISH splitting of Miller et al.).
+
+Raises
+------
+openmm.OpenMMException
+    If method is not one of these values.
+";
+%feature("docstring") OpenMMRigid::RigidBodyIntegrator::hasExplicitBodies "
+Get whether the bodies were given explicitly rather than found from the System's constraints.
+
+Returns
+-------
+bool
+";
+%feature("docstring") OpenMMRigid::RigidBodyIntegrator::getExplicitBodies "
+Get the explicit bodies passed to the constructor.
+
+Returns
+-------
+list of list of int
+    The particle indices of each body; empty when the bodies are found from the System.
+";
+%feature("docstring") OpenMMRigid::RigidBodyIntegrator::getNumBodies "
+Get the number of rigid bodies. Only available once the integrator is bound to a Context.
+
+Returns
+-------
+int
+";
+%feature("docstring") OpenMMRigid::RigidBodyIntegrator::getBodyParticles "
+Get the particle indices of a rigid body. Only available once the integrator is bound to a Context.
+
+Parameters
+----------
+index : int
+    The index of the body, from 0 to ``getNumBodies() - 1``.
+
+Returns
+-------
+list of int
+";
+%feature("docstring") OpenMMRigid::RigidBodyIntegrator::getBodyKind "
+Get the kind of a rigid body. Only available once the integrator is bound to a Context (for an
+explicit body, once positions have been set).
+
+Parameters
+----------
+index : int
+    The index of the body, from 0 to ``getNumBodies() - 1``.
+
+Returns
+-------
+str
+    \"point\" (one particle: translation only), \"linear\" (two rotational degrees of freedom),
+    \"spherical\", \"symmetric\" or \"asymmetric\" (by its principal moments).
+";
+%feature("docstring") OpenMMRigid::RigidBodyIntegrator::getBodyMoments "
+Get the principal moments of inertia of a rigid body, in ascending order.
+
+Parameters
+----------
+index : int
+    The index of the body, from 0 to ``getNumBodies() - 1``.
+
+Returns
+-------
+openmm.unit.Quantity
+    A list of three moments, in amu nm^2.
+";
+%feature("docstring") OpenMMRigid::RigidBodyIntegrator::getTranslationalKineticEnergy "
+Get the kinetic energy of the translation of the bodies' centres of mass plus that of the free
+particles. Only available once the integrator is bound to a Context.
+
+Returns
+-------
+openmm.unit.Quantity
+    The energy, in kJ/mol.
+";
+%feature("docstring") OpenMMRigid::RigidBodyIntegrator::getRotationalKineticEnergy "
+Get the kinetic energy of the rotation of the bodies about their centres of mass. Only available
+once the integrator is bound to a Context.
+
+Returns
+-------
+openmm.unit.Quantity
+    The energy, in kJ/mol.
+";
+%feature("docstring") OpenMMRigid::RigidBodyIntegrator::getNumDegreesOfFreedom "
+Get the number of degrees of freedom of the system as this integrator moves it. Only available
+once the integrator is bound to a Context.
+
+3 per free particle, less one per constraint among free particles, plus 3 translational and 0
+(point), 2 (linear) or 3 rotational ones per body, less 3 if the System has a CMMotionRemover. The
+temperature is 2 KE / (dof k_B).
+
+Returns
+-------
+int
+";
+%feature("docstring") OpenMMRigid::RigidBodyIntegrator::step "
+Advance a simulation through time by taking a series of time steps.
+
+Parameters
+----------
+steps : int
+    The number of time steps to take.
+";
+
+// ---- the class ----
+
+#define OPENMM_EXPORT_RIGID
+// The helpers behind pickle, copy and XmlSerializer (openmmrigid/integrator.py); private names.
+%rename(_deserializeRigidBodyIntegrator) OpenMMRigid::Python::deserializeRigidBodyIntegrator;
+%rename(_cloneRigidBodyIntegrator) OpenMMRigid::Python::cloneRigidBodyIntegrator;
+%rename(_asRigidBodyIntegrator) OpenMMRigid::Python::asRigidBodyIntegrator;
+%newobject OpenMMRigid::Python::deserializeRigidBodyIntegrator;
+%newobject OpenMMRigid::Python::cloneRigidBodyIntegrator;
+%include "RigidBodyIntegrator.h"
+
+namespace OpenMMRigid {
+namespace Python {
+RigidBodyIntegrator* deserializeRigidBodyIntegrator(const std::string& xml);
+RigidBodyIntegrator* cloneRigidBodyIntegrator(const RigidBodyIntegrator& integrator);
+RigidBodyIntegrator* asRigidBodyIntegrator(OpenMM::Integrator* integrator);
+} // namespace Python
+} // namespace OpenMMRigid
+
+%extend OpenMMRigid::RigidBodyIntegrator {
+%pythoncode %{
+    def computeSystemTemperature(self):
+        """Get the instantaneous temperature of the system, 2 KE / (dof k_B).
+
+        KE is the kinetic energy of the bodies (translation and rotation) and of the free particles,
+        dof is ``getNumDegreesOfFreedom()``. ``openmm.app.StateDataReporter`` calls this method when
+        an integrator has it. Only available once the integrator is bound to a Context.
+
+        Returns
+        -------
+        openmm.unit.Quantity
+            The temperature, in K.
+        """
+        dof = self.getNumDegreesOfFreedom()
+        if dof <= 0:
+            return 0.0*_unit.kelvin
+        kineticEnergy = self.getTranslationalKineticEnergy() + self.getRotationalKineticEnergy()
+        return (2*kineticEnergy/(dof*_unit.MOLAR_GAS_CONSTANT_R)).in_units_of(_unit.kelvin)
+
+    def __getstate__(self):
+        return _openmm_package.XmlSerializer.serialize(self)
+
+    def __setstate__(self, serializationString):
+        integrator = _deserializeRigidBodyIntegrator(serializationString)
+        self.this = integrator.this
+
+    def __copy__(self):
+        duplicate = _cloneRigidBodyIntegrator(self)
+        duplicate.__class__ = self.__class__
+        attributes = {key: value for key, value in self.__dict__.items() if key != 'this'}
+        from copy import deepcopy
+        duplicate.__dict__.update(deepcopy(attributes))
+        return duplicate
+
+    def __deepcopy__(self, memo):
+        return self.__copy__()
+%}
+}

@@ -1,0 +1,34 @@
+#ifndef OPENMMRIGID_RIGIDBODYINTEGRATORPROXY_H_
+#define OPENMMRIGID_RIGIDBODYINTEGRATORPROXY_H_
+
+#include "internal/windowsExportRigid.h"
+#include "openmm/serialization/SerializationProxy.h"
+
+namespace OpenMMRigid {
+
+/**
+ * This is a proxy for serializing RigidBodyIntegrator objects. It writes the step size, constraint
+ * tolerance, integration force groups, rotation method and, when the bodies were given explicitly,
+ * the particle indices of each body:
+ *
+ *     <Integrator type="RigidBodyIntegrator" version="1" stepSize=".." constraintTolerance=".."
+ *                 integrationForceGroups=".." rotationMethod="0" explicitBodies="1">
+ *         <Bodies>
+ *             <Body><Particle index="0"/><Particle index="1"/>...</Body>
+ *             ...
+ *         </Bodies>
+ *     </Integrator>
+ *
+ * Every field but the step size is read with a default (the constructor's), so that files written
+ * by earlier versions still load.
+ */
+class OPENMM_EXPORT_RIGID RigidBodyIntegratorProxy : public OpenMM::SerializationProxy {
+public:
+    RigidBodyIntegratorProxy();
+    void serialize(const void* object, OpenMM::SerializationNode& node) const;
+    void* deserialize(const OpenMM::SerializationNode& node) const;
+};
+
+} // namespace OpenMMRigid
+
+#endif /*OPENMMRIGID_RIGIDBODYINTEGRATORPROXY_H_*/
