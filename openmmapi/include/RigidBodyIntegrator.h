@@ -124,6 +124,13 @@ public:
      */
     int getNumDegreesOfFreedom() const;
     /**
+     * Get the instantaneous temperature of the system, 2 KE / (dof k_B) with dof from
+     * getNumDegreesOfFreedom(), measured in K. openmm.app.StateDataReporter uses this method when an
+     * integrator has it, so its temperature is right for explicit bodies too. Only available once
+     * the integrator is bound to a Context.
+     */
+    double computeSystemTemperature();
+    /**
      * Advance a simulation through time by taking a series of time steps.
      *
      * @param steps   the number of time steps to take

@@ -4,6 +4,7 @@
 #include "openmm/Context.h"
 #include "openmm/OpenMMException.h"
 #include "openmm/internal/ContextImpl.h"
+#include "openmm/reference/SimTKOpenMMRealType.h"
 #include <string>
 
 using namespace OpenMM;
@@ -84,6 +85,13 @@ int RigidBodyIntegrator::getNumDegreesOfFreedom() const {
     for (int b = 0; b < getNumBodies(); b++)
         getShapedBody(b);
     return getKernel().getBodies().getNumDegreesOfFreedom();
+}
+
+double RigidBodyIntegrator::computeSystemTemperature() {
+    int dof = getNumDegreesOfFreedom();
+    if (dof <= 0)
+        return 0.0;
+    return 2.0*computeKineticEnergy()/(dof*BOLTZ);
 }
 
 double RigidBodyIntegrator::getTranslationalKineticEnergy() {

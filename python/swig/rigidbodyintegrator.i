@@ -193,6 +193,9 @@ import openmm as _openmm_package
 %pythonappend OpenMMRigid::RigidBodyIntegrator::getRotationalKineticEnergy %{
     val = _unit.Quantity(val, _unit.kilojoule_per_mole)
 %}
+%pythonappend OpenMMRigid::RigidBodyIntegrator::computeSystemTemperature %{
+    val = _unit.Quantity(val, _unit.kelvin)
+%}
 %pythonappend OpenMMRigid::RigidBodyIntegrator::getBodyMoments %{
     val = _unit.Quantity(val, _unit.amu*_unit.nanometer**2)
 %}
@@ -389,24 +392,6 @@ RigidBodyIntegrator* asRigidBodyIntegrator(OpenMM::Integrator* integrator);
 
 %extend OpenMMRigid::RigidBodyIntegrator {
 %pythoncode %{
-    def computeSystemTemperature(self):
-        """Get the instantaneous temperature of the system, 2 KE / (dof k_B).
-
-        KE is the kinetic energy of the bodies (translation and rotation) and of the free particles,
-        dof is ``getNumDegreesOfFreedom()``. ``openmm.app.StateDataReporter`` calls this method when
-        an integrator has it. Only available once the integrator is bound to a Context.
-
-        Returns
-        -------
-        openmm.unit.Quantity
-            The temperature, in K.
-        """
-        dof = self.getNumDegreesOfFreedom()
-        if dof <= 0:
-            return 0.0*_unit.kelvin
-        kineticEnergy = self.getTranslationalKineticEnergy() + self.getRotationalKineticEnergy()
-        return (2*kineticEnergy/(dof*_unit.MOLAR_GAS_CONSTANT_R)).in_units_of(_unit.kelvin)
-
     def __getstate__(self):
         return _openmm_package.XmlSerializer.serialize(self)
 
