@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Install openmm-rigid into .venv (created if missing) and run the free-rotor example.
+# Install openmm-rigid into .venv (created if missing) and run the main job: rigid TIP4P-Ew water with
+# RigidBodyIntegrator next to stock Verlet + SETTLE (examples/rigid_water.py; options pass through).
 #
 #   bash scripts/demo.sh
 set -euo pipefail
@@ -17,4 +18,4 @@ if ! .venv/bin/python -m pip --version >/dev/null 2>&1; then
 fi
 .venv/bin/python -m pip install --upgrade pip
 .venv/bin/python -m pip install .
-.venv/bin/python examples/free_rotor.py "$@"
+.venv/bin/python examples/rigid_water.py "$@"
