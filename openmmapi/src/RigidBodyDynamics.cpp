@@ -6,6 +6,7 @@
 #include "openmm/internal/ThreadPool.h"
 #include "openmm/reference/ReferenceConstraints.h"
 #include <cmath>
+#include <mutex>
 #include <string>
 
 using namespace OpenMM;
@@ -29,6 +30,13 @@ Vector3 bodyAngularVelocity(const RigidBody& body, const Vector3& bodyAngularMom
     for (int k = 0; k < 3; k++)
         omega[k] = (body.moments[k] > 0.0 ? bodyAngularMomentum[k]/body.moments[k] : 0.0);
     return omega;
+}
+
+/** Throw, naming the particle and body, unless all three components are finite. */
+void requireFinite(const Vec3& v, const char* quantity, int particle, int body) {
+    if (!(isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2])))
+        throw OpenMMException("RigidBodyIntegrator: particle " + to_string(particle) + " of body " + to_string(body) +
+                " has a non-finite " + quantity);
 }
 
 /** One Newton-Schulz step towards the nearest rotation, A (3 - A^T A) / 2: removes the rounding drift. */
@@ -61,19 +69,35 @@ void RigidBodyDynamics::setThreadPool(ThreadPool* pool) {
 }
 
 void RigidBodyDynamics::forEachBody(const function<void(int)>& task) {
+    // An exception must not escape a worker thread: the first one is kept and rethrown here.
     const int numBodies = states.size();
+    mutex errorLock;
+    string error;
+    auto guarded = [&](int b) {
+        try {
+            task(b);
+        }
+        catch (const exception& e) {
+            lock_guard<mutex> lock(errorLock);
+            if (error.empty())
+                error = e.what();
+        }
+    };
     if (threads == NULL || threads->getNumThreads() < 2 || numBodies < 64) {
         for (int b = 0; b < numBodies; b++)
-            task(b);
-        return;
+            guarded(b);
     }
-    threads->execute([&](ThreadPool& pool, int thread) {
-        int begin = (numBodies*(long long) thread)/pool.getNumThreads();
-        int end = (numBodies*(long long) (thread + 1))/pool.getNumThreads();
-        for (int b = begin; b < end; b++)
-            task(b);
-    });
-    threads->waitForThreads();
+    else {
+        threads->execute([&](ThreadPool& pool, int thread) {
+            int begin = (numBodies*(long long) thread)/pool.getNumThreads();
+            int end = (numBodies*(long long) (thread + 1))/pool.getNumThreads();
+            for (int b = begin; b < end; b++)
+                guarded(b);
+        });
+        threads->waitForThreads();
+    }
+    if (!error.empty())
+        throw OpenMMException(error);
 }
 
 void RigidBodyDynamics::ensureShapes(const vector<Vec3>& positions) {
@@ -86,9 +110,7 @@ void RigidBodyDynamics::ensureShapes(const vector<Vec3>& positions) {
         Vector3 center = {0.0, 0.0, 0.0};
         for (int i = 0; i < n; i++) {
             const Vec3& r = positions[body.particles[i]];
-            if (!(isfinite(r[0]) && isfinite(r[1]) && isfinite(r[2])))
-                throw OpenMMException("RigidBodyIntegrator: particle " + to_string(body.particles[i]) + " of body " +
-                        to_string(b) + " has a non-finite position");
+            requireFinite(r, "position", body.particles[i], b);
             for (int k = 0; k < 3; k++)
                 center[k] += body.masses[i]*r[k]/body.mass;
         }
@@ -121,12 +143,8 @@ void RigidBodyDynamics::fitBody(int index, vector<Vec3>& positions, vector<Vec3>
     for (int i = 0; i < n; i++) {
         const Vec3& r = positions[body.particles[i]];
         const Vec3& v = velocities[body.particles[i]];
-        if (!(isfinite(r[0]) && isfinite(r[1]) && isfinite(r[2])))
-            throw OpenMMException("RigidBodyIntegrator: particle " + to_string(body.particles[i]) + " of body " +
-                    to_string(index) + " has a non-finite position");
-        if (!(isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2])))
-            throw OpenMMException("RigidBodyIntegrator: particle " + to_string(body.particles[i]) + " of body " +
-                    to_string(index) + " has a non-finite velocity");
+        requireFinite(r, "position", body.particles[i], index);
+        requireFinite(v, "velocity", body.particles[i], index);
         for (int k = 0; k < 3; k++) {
             center[k] += body.masses[i]*r[k]/body.mass;
             velocity[k] += body.masses[i]*v[k]/body.mass;
@@ -212,6 +230,9 @@ void RigidBodyDynamics::firstHalf(vector<Vec3>& positions, vector<Vec3>& velocit
         // Half kick, then the free drift: translation and rotation.
         velocity += force*(0.5*dt/body.mass);
         angularMomentum += torque*(0.5*dt);
+        if (!(isfinite(velocity.dot(velocity)) && isfinite(angularMomentum.dot(angularMomentum))))
+            throw OpenMMException("RigidBodyIntegrator: body " + to_string(b) + " has a non-finite velocity, force or "
+                    "torque; the simulation is unstable (try a smaller step size)");
         state.velocity = toVector(velocity);
         state.angularMomentum = toVector(angularMomentum);
         for (int k = 0; k < 3; k++)
