@@ -132,6 +132,7 @@ void RigidBodyDynamics::project(vector<Vec3>& positions, vector<Vec3>& velocitie
     ensureShapes(positions);
     for (size_t b = 0; b < states.size(); b++)
         fitBody(b, positions, velocities);
+    writtenVelocities = velocities;
     fitted = true;
 }
 
@@ -191,11 +192,14 @@ void RigidBodyDynamics::fitBody(int index, vector<Vec3>& positions, vector<Vec3>
         velocities[body.particles[i]] = toVec3(velocity) + toVec3(cross(omega, arms[i]));
 }
 
-Vector3 RigidBodyDynamics::rotate(const RigidBody& body, BodyState& state, double dt, RigidBodyIntegrator::RotationMethod method) const {
+void RigidBodyDynamics::rotate(const RigidBody& body, BodyState& state, double dt, RigidBodyIntegrator::RotationMethod method) const {
     Vector3 bodyMomentum = multiply(state.attitude, state.angularMomentum);
     if (body.kind == RigidBody::Point)
-        return bodyMomentum;
-    if (method == RigidBodyIntegrator::NoSquish)
+        return;
+    // A linear body's free motion is a uniform rotation about L, which both methods take exactly:
+    // NO_SQUISH's turns about the perpendicular axes would move part of L onto the molecular axis,
+    // where the body can carry none.
+    if (method == RigidBodyIntegrator::NoSquish && body.kind != RigidBody::Linear)
         noSquishRotate(body.moments, dt, state.attitude, bodyMomentum);
     else {
         FreeRotor rotor(body.moments, bodyAngularVelocity(body, bodyMomentum), state.attitude);
@@ -203,7 +207,6 @@ Vector3 RigidBodyDynamics::rotate(const RigidBody& body, BodyState& state, doubl
         rotor.evolve(dt, omega, state.attitude);
     }
     reorthonormalize(state.attitude);
-    return bodyMomentum;
 }
 
 void RigidBodyDynamics::firstHalf(vector<Vec3>& positions, vector<Vec3>& velocities, const vector<Vec3>& forces,
@@ -212,20 +215,31 @@ void RigidBodyDynamics::firstHalf(vector<Vec3>& positions, vector<Vec3>& velocit
     forEachBody([&](int b) {
         const RigidBody& body = bodies[b];
         BodyState& state = states[b];
-        // Momenta from the particle velocities, so that anything that changed them since the last step
-        // (a CMMotionRemover, setVelocities) is taken into account; for rigid velocities they agree with
-        // the state to rounding.
+        // The momenta are the state's, unless something changed the particle velocities since this
+        // class wrote them (a CMMotionRemover, which does so without telling the integrator): then
+        // they are taken from the particles. Rebuilding them every step would not do: the few-ulp
+        // mismatch between the moments and the body coordinates would then scale L by the same
+        // factor every step, a slow systematic drift.
         const int n = body.particles.size();
-        Vec3 momentum, force, angularMomentum, torque;
-        for (int i = 0; i < n; i++)
-            momentum += velocities[body.particles[i]]*body.masses[i];
-        Vec3 velocity = momentum/body.mass;
+        bool changed = false;
+        for (int i = 0; i < n && !changed; i++)
+            changed = (velocities[body.particles[i]] != writtenVelocities[body.particles[i]]);
+        Vec3 velocity = toVec3(state.velocity), angularMomentum = toVec3(state.angularMomentum), force, torque;
+        if (changed) {
+            Vec3 momentum;
+            angularMomentum = Vec3();
+            for (int i = 0; i < n; i++)
+                momentum += velocities[body.particles[i]]*body.masses[i];
+            velocity = momentum/body.mass;
+            for (int i = 0; i < n; i++) {
+                int p = body.particles[i];
+                angularMomentum += (positions[p] - toVec3(state.center)).cross(velocities[p] - velocity)*body.masses[i];
+            }
+        }
         for (int i = 0; i < n; i++) {
             int p = body.particles[i];
-            Vec3 arm = positions[p] - toVec3(state.center);
-            angularMomentum += arm.cross(velocities[p] - velocity)*body.masses[i];
             force += forces[p];
-            torque += arm.cross(forces[p]);
+            torque += (positions[p] - toVec3(state.center)).cross(forces[p]);
         }
         // Half kick, then the free drift: translation and rotation.
         velocity += force*(0.5*dt/body.mass);
@@ -283,6 +297,7 @@ void RigidBodyDynamics::secondHalf(vector<Vec3>& positions, vector<Vec3>& veloci
         velocities[p] += forces[p]*(0.5*dt*inverseMasses[p]);
     if (constraints)
         constraints->applyToVelocities(positions, velocities, inverseMasses, constraintTolerance);
+    writtenVelocities = velocities;
 }
 
 void RigidBodyDynamics::computeKineticEnergies(const vector<Vec3>& velocities, double& translational, double& rotational) const {

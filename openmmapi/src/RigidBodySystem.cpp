@@ -45,6 +45,16 @@ void RigidBody::setShape(const vector<Vector3>& centred) {
         moments = {0.0, perpendicular, perpendicular};
     }
     else {
+        // The moments the dynamics uses are those of the stored coordinates themselves (the diagonal of
+        // their inertia tensor), so that the shape and the rotor agree to rounding.
+        for (int k = 0; k < 3; k++) {
+            double moment = 0.0;
+            for (size_t i = 0; i < bodyCoordinates.size(); i++) {
+                const Vector3& b = bodyCoordinates[i];
+                moment += masses[i]*(dot(b, b) - b[k]*b[k]);
+            }
+            moments[k] = moment;
+        }
         const double tolerance = 8*numeric_limits<double>::epsilon()*largest;
         bool equal01 = moments[1] - moments[0] <= tolerance, equal12 = moments[2] - moments[1] <= tolerance;
         kind = (equal01 && equal12 ? Spherical : (equal01 || equal12 ? Symmetric : Asymmetric));

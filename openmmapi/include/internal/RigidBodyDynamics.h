@@ -69,12 +69,12 @@ private:
         Matrix3 attitude;                           // lab to body
     };
     void forEachBody(const std::function<void(int)>& task);
-    Vector3 rotate(const RigidBody& body, BodyState& state, double dt, RigidBodyIntegrator::RotationMethod method) const;
+    void rotate(const RigidBody& body, BodyState& state, double dt, RigidBodyIntegrator::RotationMethod method) const;
     void fitBody(int index, std::vector<OpenMM::Vec3>& positions, std::vector<OpenMM::Vec3>& velocities);
     RigidBodySystem& system;
     std::vector<BodyState> states;
     std::vector<double> inverseMasses;
-    std::vector<OpenMM::Vec3> previousPositions;
+    std::vector<OpenMM::Vec3> previousPositions, writtenVelocities;
     std::unique_ptr<OpenMM::ReferenceConstraintAlgorithm> constraints;
     OpenMM::ThreadPool* threads;
     bool fitted;
