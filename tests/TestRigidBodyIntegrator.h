@@ -1072,4 +1072,24 @@ int runPlatformTests(Platform& platform) {
     return failures;
 }
 
+/**
+ * The main() of a platform's test file: set the platform up (load it, register our kernels), run
+ * every test on it, and report the way ctest and OpenMM's own tests do.
+ */
+inline int runMain(const std::function<Platform&()>& setUpPlatform) {
+    try {
+        int failures = runPlatformTests(setUpPlatform());
+        if (failures > 0) {
+            std::cout << failures << " test(s) failed" << std::endl;
+            return 1;
+        }
+    }
+    catch (const std::exception& e) {
+        std::cout << "exception: " << e.what() << std::endl;
+        return 1;
+    }
+    std::cout << "Done" << std::endl;
+    return 0;
+}
+
 } // namespace RigidBodyIntegratorTests
