@@ -51,7 +51,7 @@ void reorthonormalize(Matrix3& a) {
 
 } // namespace
 
-RigidBodyDynamics::RigidBodyDynamics(RigidBodySystem& system) : system(system), threads(NULL), fitted(false) {
+RigidBodyDynamics::RigidBodyDynamics(RigidBodySystem& system) : system(system), threads(NULL) {
     states.resize(system.getBodies().size());
     const vector<double>& masses = system.getMasses();
     inverseMasses.resize(masses.size());
@@ -133,7 +133,6 @@ void RigidBodyDynamics::project(vector<Vec3>& positions, vector<Vec3>& velocitie
     for (size_t b = 0; b < states.size(); b++)
         fitBody(b, positions, velocities);
     writtenVelocities = velocities;
-    fitted = true;
 }
 
 void RigidBodyDynamics::fitBody(int index, vector<Vec3>& positions, vector<Vec3>& velocities) {

@@ -47,12 +47,6 @@ public:
      * same linear and angular momentum. Explicit bodies take their shape from the first positions.
      */
     void project(std::vector<OpenMM::Vec3>& positions, std::vector<OpenMM::Vec3>& velocities);
-    /** Whether project() has been called since the bodies were created. */
-    bool isFitted() const {
-        return fitted;
-    }
-    /** Make sure every body has a shape, taking explicit bodies' shapes from these positions. */
-    void ensureShapes(const std::vector<OpenMM::Vec3>& positions);
     void firstHalf(std::vector<OpenMM::Vec3>& positions, std::vector<OpenMM::Vec3>& velocities,
                    const std::vector<OpenMM::Vec3>& forces, double dt, RigidBodyIntegrator::RotationMethod method,
                    double constraintTolerance);
@@ -69,6 +63,8 @@ private:
         Matrix3 attitude;                           // lab to body
     };
     void forEachBody(const std::function<void(int)>& task);
+    /** Make sure every body has a shape, taking explicit bodies' shapes from these positions. */
+    void ensureShapes(const std::vector<OpenMM::Vec3>& positions);
     void rotate(const RigidBody& body, BodyState& state, double dt, RigidBodyIntegrator::RotationMethod method) const;
     void fitBody(int index, std::vector<OpenMM::Vec3>& positions, std::vector<OpenMM::Vec3>& velocities);
     RigidBodySystem& system;
@@ -77,7 +73,6 @@ private:
     std::vector<OpenMM::Vec3> previousPositions, writtenVelocities;
     std::unique_ptr<OpenMM::ReferenceConstraintAlgorithm> constraints;
     OpenMM::ThreadPool* threads;
-    bool fitted;
 };
 
 } // namespace OpenMMRigid
