@@ -270,7 +270,6 @@ inline void FreeRotor::initializeAsymmetric(Representation requested) {
         m = 0.0;
         return;
     }
-    quarterPeriod = Special::ellipticK(m, m1);
 
     // The initial argument: sn(eps) = w2/w2m, cn(eps) = w1/w1m, dn(eps) = w3/w3m (vZS eq. (3.42)),
     // with all three ratios used so that eps keeps full precision near the turning points.
@@ -313,9 +312,28 @@ inline void FreeRotor::initializeAsymmetric(Representation requested) {
 
 inline void FreeRotor::initializeThetaSeries(double& sn0, double& cn0, double& dn0) {
     const double i1 = internalMoments[0], i3 = internalMoments[2];
-    const double kComplement = Special::ellipticK(m1, m);
-    const double logNome = -M_PI*kComplement/quarterPeriod;  // ln q, q = exp(-pi K'/K)
+    // The nome q = exp(-pi K'/K) by Jacobi's series q = l + 2 l^5 + 15 l^9 + 150 l^13 + ... with
+    // l = (1 - m1^(1/4)) / (2 (1 + m1^(1/4))) (Abramowitz & Stegun 17.3.21), which converges fast for
+    // m <= 1/2 (l <= 0.044). Above, the same series in m gives the complementary nome q' = exp(-pi K/K'),
+    // and ln q ln q' = pi^2. Then K = (pi/2) theta_3(0|q)^2 (DLMF 20.9.2): no AGM is needed.
+    auto jacobiNome = [](double fourthRoot, double oneMinusParameter) {
+        // 1 - p^(1/4) = (1 - p) / ((1 + p^(1/2))(1 + p^(1/4))), free of cancellation for p near 1.
+        double l = oneMinusParameter/((1.0 + fourthRoot*fourthRoot)*(1.0 + fourthRoot))/(2.0*(1.0 + fourthRoot));
+        double l4 = l*l*l*l;
+        return l*(1.0 + l4*(2.0 + l4*(15.0 + l4*(150.0 + l4*(1707.0 + l4*(20910.0 + l4*268616.0))))));
+    };
+    double logNome;
+    if (m <= 0.5)
+        logNome = std::log(jacobiNome(std::sqrt(std::sqrt(m1)), m));
+    else
+        logNome = M_PI*M_PI/std::log(jacobiNome(std::sqrt(std::sqrt(m)), m1));
     const double nome = std::exp(logNome);
+    double theta3AtZero = 1.0;
+    for (double power = nome, step = nome*nome*nome; power > 0.25*std::numeric_limits<double>::epsilon(); step *= nome*nome) {
+        theta3AtZero += 2.0*power;  // 2 q^{n^2}, with q^{(n+1)^2} = q^{n^2} q^{2n+1}
+        power *= step;
+    }
+    quarterPeriod = 0.5*M_PI*theta3AtZero*theta3AtZero;
     thetaScale = M_PI/(2.0*quarterPeriod);
     // eta = sgn(w3m) K' - F(I3 w3m / L | 1 - m) (vZS eq. (3.47)). With x = I3 w3m / L the difference
     // K' - F(|x| | m1) is F of the complementary amplitude (DLMF 19.11.3), which by the homogeneity
@@ -433,6 +451,7 @@ inline void FreeRotor::thetaSeries(double u, double& sn, double& cn, double& dn,
 
 inline void FreeRotor::initializeEllipticIntegral(double& sn0, double& cn0, double& dn0) {
     const double i1 = internalMoments[0], i2 = internalMoments[1], i3 = internalMoments[2];
+    quarterPeriod = Special::ellipticK(m, m1);
     characteristic = -i3*(i2 - i1)/(i1*(i3 - i2));
     integralPrefactor = angularMomentum*(i3 - i1)/(i1*i3*wp);
     // The excess of Pi(n|m) over K over a half period: (n/3) RJ(0, m1, 1, 1 - n) (DLMF 19.25.2 with DLMF 19.25.14).
