@@ -29,10 +29,11 @@ namespace Special {
 
 namespace detail {
 
-// Duplication in Carlson's algorithms stops once 4^-n Q < |A_n|, with Q = (3 eps)^(-1/6) max|A_0 - x|
-// for RF and (eps/4)^(-1/6) max|A_0 - x| for RJ: the Taylor remainder is then below machine
-// precision (Carlson, Numer. Algorithms 10 (1995) 13, eqs. (2.2) and (2.36)).
-inline const double rfStopFactor = std::pow(3.0*std::numeric_limits<double>::epsilon(), -1.0/6.0);
+// Duplication in Carlson's algorithms stops once 4^-n Q < |A_n|, with Q = (3 eps)^(-1/8) max|A_0 - x|
+// for RF (whose series below keeps the seventh-order terms of DLMF 19.36.1, one duplication fewer
+// than the fifth-order series needs) and (eps/4)^(-1/6) max|A_0 - x| for RJ: the Taylor remainder
+// is then below machine precision (Carlson, Numer. Algorithms 10 (1995) 13, eqs. (2.2) and (2.36)).
+inline const double rfStopFactor = std::pow(3.0*std::numeric_limits<double>::epsilon(), -1.0/8.0);
 inline const double rjStopFactor = std::pow(0.25*std::numeric_limits<double>::epsilon(), -1.0/6.0);
 
 inline void requireParameter(const char* function, double m, double m1) {
@@ -46,7 +47,7 @@ inline void requireParameter(const char* function, double m, double m1) {
 /**
  * Carlson's symmetric integral RF(x, y, z) = 1/2 int_0^inf dt / sqrt((t+x)(t+y)(t+z)) for
  * x, y, z >= 0 with at most one of them zero (DLMF 19.16.1), by the duplication theorem
- * (DLMF 19.26.18) and the fifth-order Taylor expansion of DLMF 19.36.1.
+ * (DLMF 19.26.18) and the seventh-order Taylor expansion of DLMF 19.36.1.
  */
 inline double carlsonRF(double x, double y, double z) {
     if (!(x >= 0.0 && y >= 0.0 && z >= 0.0))
@@ -75,7 +76,8 @@ inline double carlsonRF(double x, double y, double z) {
     double dz = -dx - dy;
     double e2 = dx*dy - dz*dz;
     double e3 = dx*dy*dz;
-    return (1.0 - e2/10.0 + e3/14.0 + e2*e2/24.0 - 3.0*e2*e3/44.0)/std::sqrt(mean);
+    return (1.0 - e2/10.0 + e3/14.0 + e2*e2/24.0 - 3.0*e2*e3/44.0 - 5.0*e2*e2*e2/208.0 + 3.0*e3*e3/104.0 +
+            e2*e2*e3/16.0)/std::sqrt(mean);
 }
 
 /**
