@@ -342,22 +342,32 @@ inline void FreeRotor::initializeThetaSeries(double& sn0, double& cn0, double& d
     const double l3 = i3*w3m, c = (i1*w1m)*(i1*w1m);
     const double eta = (w3m < 0.0 ? -1.0 : 1.0)*std::sqrt(c)*
             Special::carlsonRF(m*l3*l3, m*angularMomentum*angularMomentum, m*l3*l3 + c);
-    // Theta coefficients (notes, initialization step 9) with the common factor 2 q^{1/4} dropped,
-    // since only the phase of theta_1 enters psi: q^{n(n+1)} (e^{(2n+1)x} +- e^{-(2n+1)x}), x = pi eta / 2K.
-    // The same powers q^{n(n+1)} and q^{n^2} give the real theta functions for sn, cn, dn.
+    // Theta coefficients (notes, initialization step 9) with the common factor q^{1/4} dropped, since
+    // only the phase of theta_1 enters psi: cr = 2 (-1)^n q^{n(n+1)} cosh((2n+1)x) and
+    // ci = -2 (-1)^n q^{n(n+1)} sinh((2n+1)x), x = pi eta / 2K. The hyperbolic functions are advanced
+    // by the addition theorem from sinh x (taken from expm1), so that sinh keeps its relative accuracy
+    // when x is small (L near axis 3). The same powers q^{n(n+1)} and q^{n^2} give the real theta
+    // functions for sn, cn, dn.
     const double x = thetaScale*eta;
-    const double expm1x = std::expm1(x);  // e^x - 1, kept for coth(x) below
-    double plus = 1.0 + expm1x, minus = 1.0/plus;  // e^{+-(2n+1)x}
-    const double grow = plus*plus, shrink = minus*minus;
+    const double expm1x = std::expm1(x);
+    const double sinhX = 0.5*expm1x*(1.0 + 1.0/(1.0 + expm1x)), coshX = std::sqrt(1.0 + sinhX*sinhX);
+    const double sinh2X = 2.0*sinhX*coshX, cosh2X = 1.0 + 2.0*sinhX*sinhX;
+    double sinhK = sinhX, coshK = coshX;  // of (2n+1)x
     double oddPower = 1.0;   // q^{n(n+1)}
     double step = nome*nome; // q^{2(n+1)}, the ratio q^{(n+1)(n+2)} / q^{n(n+1)}
     double evenPower = 1.0, evenStep = nome;  // q^{n^2} and q^{2n+1}
+    // A2 (vZS eq. (3.53), (4.8)): L/I1 + (pi wp / 2K) times the bracket [coth(x) - 2 sum q^{2n}/(1 - q^{2n})
+    // (xi^n - xi^-n)], which is i theta_1'/theta_1 at i x (DLMF 20.5.10). Written with the theta series
+    // itself it is sum (2n+1) cr / (-sum ci): the same few terms instead of a Lambert series in q.
+    double derivative = 0.0, value = 0.0;
     thetaTerms = 0;
     double firstTerm = 0.0;
     for (int n = 0; n < maxThetaTerms; n++) {
-        double sign = (n%2 == 0 ? 1.0 : -1.0);
-        cr[n] = sign*oddPower*(plus + minus);
-        ci[n] = -sign*oddPower*(plus - minus);
+        double sign = (n%2 == 0 ? 2.0 : -2.0);
+        cr[n] = sign*oddPower*coshK;
+        ci[n] = -sign*oddPower*sinhK;
+        derivative += (2*n + 1)*cr[n];
+        value -= ci[n];
         oddPowers[n] = oddPower;
         evenPowers[n] = evenPower;
         thetaTerms = n + 1;
@@ -370,8 +380,9 @@ inline void FreeRotor::initializeThetaSeries(double& sn0, double& cn0, double& d
         step *= nome*nome;
         evenPower *= evenStep;
         evenStep *= nome*nome;
-        plus *= grow;
-        minus *= shrink;
+        double nextSinh = sinhK*cosh2X + coshK*sinh2X;
+        coshK = coshK*cosh2X + sinhK*sinh2X;
+        sinhK = nextSinh;
     }
     if (thetaTerms == maxThetaTerms)
         throw std::invalid_argument("FreeRotor: the theta series does not converge at m = " + std::to_string(m) +
@@ -389,22 +400,7 @@ inline void FreeRotor::initializeThetaSeries(double& sn0, double& cn0, double& d
     snScale = theta3/theta2;
     cnScale = theta4/theta2;
     dnScale = theta4/theta3;
-    // A2 (vZS eq. (4.8)): L/I1 + (pi wp / 2K) [coth(x) - 2 sum_n q^{2n} / (1 - q^{2n}) (xi^n - xi^-n)],
-    // xi = e^{2x}; 1 - q^{2n} is built up as (1 - q^{2n-2}) + q^{2n-2}(1 - q^2), free of cancellation.
-    const double oneMinusNomeSquared = -std::expm1(2.0*logNome);
-    double sum = 0.0, nomePower = nome*nome, oneMinus = oneMinusNomeSquared, xiPower = grow, xiInverse = shrink;
-    for (int n = 1; n < 100000; n++) {
-        double term = nomePower/oneMinus*(xiPower - xiInverse);
-        sum += term;
-        if (std::fabs(term) <= 0.25*std::numeric_limits<double>::epsilon()*std::fabs(sum))
-            break;
-        oneMinus += nomePower*oneMinusNomeSquared;
-        nomePower *= nome*nome;
-        xiPower *= grow;
-        xiInverse *= shrink;
-    }
-    const double cothX = (grow + 1.0)/(expm1x*(2.0 + expm1x));  // (e^{2x} + 1)/(e^{2x} - 1)
-    phase2 = angularMomentum/i1 + thetaScale*wp*(cothX - 2.0*sum);
+    phase2 = angularMomentum/i1 + thetaScale*wp*derivative/value;
     double re, im;
     thetaSeries(epsilon, sn0, cn0, dn0, re, im);
     // A1 = arg theta_1(eps) (vZS eq. (4.5)); only its cosine and sine are needed.
