@@ -1,0 +1,524 @@
+#!/usr/bin/env python
+"""Wall time per step of RigidBodyIntegrator next to stock VerletIntegrator + SETTLE (CPU platform).
+
+Part 1, water boxes: TIP3P and TIP4P-Ew boxes (openmm.app, PME, cutoff 0.9 nm, rigid water) of 500,
+2000 and 8000 molecules, each minimized and briefly equilibrated with a stock Langevin integrator.
+From that one state, three Contexts are created once each: stock VerletIntegrator + SETTLE,
+RigidBodyIntegrator (Exact) and RigidBodyIntegrator (NoSquish), all at 2 fs. After a warm-up block
+each, blocks of `integrator.step(n)` are timed with time.perf_counter(), interleaved (A B C A B C ...);
+nothing else is inside the timed region. Reported: the median ms/step of each and its ratio to stock.
+
+Part 2, the integrator alone: Systems of N rigid bodies with no forces at all (a System with
+particles and, for water, its constraints; the cheapest force evaluation there is, cheaper than a
+zero-energy CustomExternalForce, which still loops over the particles), random orientations,
+velocities from setVelocitiesToTemperature(300 K). Body kinds: water (TIP3P geometry, asymmetric,
+bodies found from the constraints) and, as explicit bodies, linear CO2 (3 collinear particles), a
+spherical CH4-like top (centre + 4 tetrahedral H), a symmetric NH3-like top (4 particles) and single
+particles. Reported: median ns/body/step for Exact and NoSquish (interleaved) and their ratio. This
+includes the fixed cost of a step (the Python call, an empty force evaluation), spread over N bodies.
+
+Both parts run with one thread and with the CPU platform's default thread count (property Threads).
+
+    python benchmarks/step_cost.py            # full: about 15 minutes on 2 cores
+    python benchmarks/step_cost.py --quick    # small sizes, short blocks: under 2 minutes
+
+Writes benchmarks/results/step_cost.csv, integrator_only.csv, step_cost.png and step_cost.log (a
+copy of what is printed).
+"""
+
+import argparse
+import csv
+import datetime
+import hashlib
+import math
+import os
+import platform as pyplatform
+import shlex
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import openmm
+from openmm import app, unit
+
+import openmmrigid
+
+ROOT = Path(__file__).resolve().parent.parent
+RESULTS = ROOT / "benchmarks" / "results"
+STEP = 2*unit.femtosecond
+CUTOFF = 0.9*unit.nanometer
+TEMPERATURE = 300*unit.kelvin
+MODEL_NAMES = {"tip3p": "TIP3P", "tip4pew": "TIP4P-Ew"}
+STOCK, EXACT, NOSQUISH = "VerletIntegrator+SETTLE", "RigidBodyIntegrator/Exact", "RigidBodyIntegrator/NoSquish"
+LOG = None
+
+
+def say(text=""):
+    """Print a line and copy it to the log file, flushing both (progress shows while it runs)."""
+    print(text, flush=True)
+    if LOG is not None:
+        LOG.write(text + "\n")
+        LOG.flush()
+
+
+def progress(text):
+    say(f"[{datetime.datetime.now():%H:%M:%S}] {text}")
+
+
+# ---------------------------------------------------------------------------------------------------
+# Machine, options
+
+def processorName():
+    try:
+        for line in subprocess.run(["lscpu"], capture_output=True, text=True, check=True).stdout.splitlines():
+            if line.startswith("Model name:"):
+                return line.split(":", 1)[1].strip()
+    except (OSError, subprocess.CalledProcessError):
+        pass
+    return pyplatform.processor() or pyplatform.machine()
+
+
+def gitDescription():
+    try:
+        head = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True,
+                              text=True, check=True).stdout.strip()
+        dirty = subprocess.run(["git", "-C", str(ROOT), "status", "--porcelain", "--untracked-files=no"],
+                               capture_output=True, text=True, check=True).stdout.strip()
+        return head + (" (tracked files modified)" if dirty else "")
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+
+
+def loadAverage():
+    try:
+        return " ".join(Path("/proc/loadavg").read_text().split()[:3])
+    except OSError:
+        return "unknown"
+
+
+def libraryStamp():
+    """When the loaded plugin libraries were built, and a hash (the C++ may be rebuilt between runs)."""
+    folder = Path(openmmrigid.__file__).parent
+    digest, newest = hashlib.sha256(), 0.0
+    libraries = sorted(folder.glob("*.so")) + sorted(folder.glob("*.dylib")) + sorted(folder.glob("*.dll"))
+    for library in libraries:
+        digest.update(library.read_bytes())
+        newest = max(newest, library.stat().st_mtime)
+    if not libraries:
+        return "no libraries found"
+    return f"built {datetime.datetime.fromtimestamp(newest):%Y-%m-%d %H:%M:%S}, sha256 {digest.hexdigest()[:12]}"
+
+
+def printHeader(args, cpu):
+    say(f"command:   {shlex.join([sys.executable] + sys.argv)}")
+    say(f"date:      {datetime.datetime.now().astimezone():%Y-%m-%d %H:%M:%S %Z}")
+    say(f"machine:   {processorName()}, {pyplatform.machine()}, os.cpu_count() = {os.cpu_count()}, "
+        f"CPU platform default Threads = {cpu.getPropertyDefaultValue('Threads')}")
+    say(f"software:  OpenMM {openmm.version.full_version} (Platform.getOpenMMVersion {openmm.Platform.getOpenMMVersion()}), "
+        f"openmmrigid {openmmrigid.__version__}")
+    say(f"plugin:    {Path(openmmrigid.__file__).parent} ({libraryStamp()}); source tree git {gitDescription()}")
+    say(f"load:      {loadAverage()} (1, 5, 15 min) before starting; other work on these cores distorts the timings")
+    say(f"settings:  {'quick' if args.quick else 'full'}; step 2 fs; repetitions {args.repetitions}; "
+        f"block target {args.seconds:g} s unless --steps; threads {', '.join(args.threads)}")
+    say()
+
+
+def threadProperties(threads):
+    """Context properties for a thread count (a 'default' entry has become the platform's default)."""
+    return {"Threads": threads}
+
+
+def parseArguments():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--quick", action="store_true",
+                        help="small boxes (250, 500 molecules) and short blocks: under 2 minutes")
+    parser.add_argument("--sizes", type=int, nargs="+", help="water molecules per box (default 500 2000 8000)")
+    parser.add_argument("--models", nargs="+", choices=sorted(MODEL_NAMES), help="water models (default tip3p tip4pew)")
+    parser.add_argument("--repetitions", type=int, default=5, help="timed blocks per integrator (default 5)")
+    parser.add_argument("--steps", type=int,
+                        help="steps per timed block in the water boxes (default: chosen so a block takes --seconds)")
+    parser.add_argument("--body-steps", type=int, help="steps per timed block in part 2 (default: chosen likewise)")
+    parser.add_argument("--seconds", type=float, help="target seconds per timed block (default 2, quick 0.25)")
+    parser.add_argument("--threads", nargs="+",
+                        help="CPU thread counts; 'default' is the platform's default, Threads as OpenMM "
+                             "chooses it (default: 1 default; a count given twice runs once)")
+    parser.add_argument("--bodies", type=int, default=8000, help="bodies per kind in part 2 (default 8000)")
+    parser.add_argument("--only", choices=["boxes", "bodies"], help="run only part 1 (boxes) or part 2 (bodies)")
+    args = parser.parse_args()
+    args.sizes = args.sizes or ([250, 500] if args.quick else [500, 2000, 8000])
+    args.models = args.models or ["tip3p", "tip4pew"]
+    args.seconds = args.seconds or (0.25 if args.quick else 2.0)
+    args.threads = args.threads or ["1", "default"]
+    args.equilibrationSteps = 100 if args.quick else 500
+    for threads in args.threads:
+        if threads != "default" and not (threads.isdigit() and int(threads) > 0):
+            parser.error(f"--threads: {threads!r} is neither a positive integer nor 'default'")
+    if args.repetitions < 5:
+        print(f"note: {args.repetitions} repetitions; the benchmark's rule is medians of at least five", file=sys.stderr)
+    return args
+
+
+# ---------------------------------------------------------------------------------------------------
+# Timing
+
+def timeBlock(integrator, steps):
+    start = time.perf_counter()
+    integrator.step(steps)
+    return time.perf_counter() - start
+
+
+def secondsPerStep(integrator, target):
+    """A rough cost per step: time blocks of 1, 4, 16, ... steps until one takes a tenth of the target."""
+    steps = 1
+    while True:
+        elapsed = timeBlock(integrator, steps)
+        if elapsed >= 0.1*target or steps >= 1 << 16:
+            return elapsed/steps
+        steps *= 4
+
+
+def blockSteps(integrator, fixed, target, minimum):
+    """Steps per timed block: `fixed` if given, else enough for `target` seconds (at least `minimum`)."""
+    if fixed:
+        return fixed
+    return max(minimum, int(round(target/secondsPerStep(integrator, target))))
+
+
+def timeInterleaved(integrators, steps, repetitions):
+    """Warm up each integrator with one block, then time `repetitions` blocks each, interleaved.
+
+    integrators: {label: integrator}, each bound to its own Context. Returns {label: [s/step, ...]}.
+    """
+    for integrator in integrators.values():
+        integrator.step(steps)
+    times = {label: [] for label in integrators}
+    for _ in range(repetitions):
+        for label, integrator in integrators.items():
+            times[label].append(timeBlock(integrator, steps)/steps)
+    return times
+
+
+def summary(samples, scale):
+    values = [scale*value for value in samples]
+    return statistics.median(values), min(values), max(values)
+
+
+# ---------------------------------------------------------------------------------------------------
+# Part 1: water boxes with PME
+
+def buildBox(model, molecules):
+    forceField = app.ForceField(f"{model}.xml")
+    modeller = app.Modeller(app.Topology(), [])
+    modeller.addSolvent(forceField, model=model, numAdded=molecules)
+    system = forceField.createSystem(modeller.topology, nonbondedMethod=app.PME, nonbondedCutoff=CUTOFF,
+                                     rigidWater=True)
+    return modeller, system
+
+
+def equilibratedState(modeller, system, cpu, steps):
+    """Minimize, then run `steps` steps of LangevinMiddleIntegrator at 300 K (default threads)."""
+    integrator = openmm.LangevinMiddleIntegrator(TEMPERATURE, 1/unit.picosecond, STEP)
+    integrator.setRandomNumberSeed(2024)
+    context = openmm.Context(system, integrator, cpu)
+    context.setPositions(modeller.positions)
+    openmm.LocalEnergyMinimizer.minimize(context, 10, 500)
+    context.setVelocitiesToTemperature(TEMPERATURE, 2024)
+    integrator.step(steps)
+    return context.getState(getPositions=True, getVelocities=True, enforcePeriodicBox=True)
+
+
+def boxIntegrators():
+    stock = openmm.VerletIntegrator(STEP)
+    exact = openmmrigid.RigidBodyIntegrator(STEP)
+    exact.setRotationMethod(openmmrigid.RigidBodyIntegrator.Exact)
+    noSquish = openmmrigid.RigidBodyIntegrator(STEP)
+    noSquish.setRotationMethod(openmmrigid.RigidBodyIntegrator.NoSquish)
+    return {STOCK: stock, EXACT: exact, NOSQUISH: noSquish}
+
+
+def measureBox(model, molecules, system, state, cpu, threads, args):
+    """One row per integrator for this box and thread setting."""
+    integrators = boxIntegrators()
+    contexts = []
+    for integrator in integrators.values():
+        context = openmm.Context(system, integrator, cpu, threadProperties(threads))
+        context.setState(state)
+        contexts.append(context)
+    actualThreads = int(cpu.getPropertyValue(contexts[0], "Threads"))
+    bodies = integrators[EXACT].getNumBodies()
+    if bodies != molecules:
+        say(f"  WARNING: RigidBodyIntegrator found {bodies} bodies in {molecules} waters")
+    steps = blockSteps(integrators[STOCK], args.steps, args.seconds, 20)
+    times = timeInterleaved(integrators, steps, args.repetitions)
+    stockMedian = statistics.median(times[STOCK])
+    rows = []
+    for label, samples in times.items():
+        median, low, high = summary(samples, 1e3)
+        rows.append({"model": model, "molecules": molecules, "integrator": label, "threads": actualThreads,
+                     "median_ms_per_step": f"{median:.4f}", "ratio_to_stock": f"{statistics.median(samples)/stockMedian:.4f}",
+                     "repetitions": args.repetitions, "steps": steps,
+                     "min_ms_per_step": f"{low:.4f}", "max_ms_per_step": f"{high:.4f}"})
+    progress(f"  {MODEL_NAMES[model]} {molecules} threads={actualThreads}: {steps} steps/block; "
+             + "; ".join(f"{row['integrator'].split('/')[-1]} {float(row['median_ms_per_step']):.3f} ms "
+                         f"[{float(row['min_ms_per_step']):.3f}-{float(row['max_ms_per_step']):.3f}]" for row in rows))
+    del contexts
+    return rows
+
+
+def runBoxes(args, cpu):
+    rows = []
+    for model in args.models:
+        for molecules in args.sizes:
+            progress(f"{MODEL_NAMES[model]} {molecules}: building, minimizing, {args.equilibrationSteps} Langevin steps")
+            modeller, system = buildBox(model, molecules)
+            waters = modeller.topology.getNumResidues()
+            state = equilibratedState(modeller, system, cpu, args.equilibrationSteps)
+            for threads in args.threads:
+                rows.extend(measureBox(model, waters, system, state, cpu, threads, args))
+    return rows
+
+
+def printBoxTable(rows):
+    say("\nPart 1: water boxes, PME (cutoff 0.9 nm), 2 fs, CPU platform; median ms/step (ratio to stock)")
+    say(f"{'model':<10}{'molecules':>10}{'threads':>8}{'stock':>10}{'Exact':>10}{'NoSquish':>10}"
+        f"{'Exact/stock':>13}{'NoSq/stock':>12}")
+    for key in sorted({(r["model"], r["molecules"], r["threads"]) for r in rows},
+                      key=lambda k: (k[0], k[1], k[2])):
+        cells = {r["integrator"]: r for r in rows if (r["model"], r["molecules"], r["threads"]) == key}
+        say(f"{MODEL_NAMES[key[0]]:<10}{key[1]:>10}{key[2]:>8}"
+            + "".join(f"{float(cells[label]['median_ms_per_step']):>10.3f}" for label in (STOCK, EXACT, NOSQUISH))
+            + f"{float(cells[EXACT]['ratio_to_stock']):>13.3f}{float(cells[NOSQUISH]['ratio_to_stock']):>12.3f}")
+
+
+# ---------------------------------------------------------------------------------------------------
+# Part 2: the integrator alone, by body kind
+
+def tetrahedron(bond):
+    return [[0, 0, 0]] + [list(bond*np.array(v)/math.sqrt(3)) for v in ((1, 1, 1), (1, -1, -1), (-1, 1, -1), (-1, -1, 1))]
+
+
+def pyramid(bond, angle):
+    """NH3: N at the origin, three H at `bond` nm with H-N-H `angle` degrees (a symmetric top)."""
+    sin2 = (1 - math.cos(math.radians(angle)))/1.5  # cos(HNH) = cos^2(t) - sin^2(t)/2 for polar angle t
+    s, c = math.sqrt(sin2), math.sqrt(1 - sin2)
+    return [[0, 0, 0]] + [[bond*s*math.cos(p), bond*s*math.sin(p), -bond*c] for p in np.radians([0, 120, 240])]
+
+
+def waterGeometry():
+    half = math.radians(104.52/2)
+    return [[0, 0, 0], [0.09572*math.sin(half), 0.09572*math.cos(half), 0], [-0.09572*math.sin(half), 0.09572*math.cos(half), 0]]
+
+
+# kind: (label, masses in amu, body-frame positions in nm, expected getBodyKind)
+BODY_KINDS = {
+    "water": ("water (TIP3P, asymmetric)", [15.999, 1.008, 1.008], waterGeometry(), "asymmetric"),
+    "linear": ("linear (CO2, 3 particles)", [12.011, 15.999, 15.999], [[0, 0, 0], [0, 0, 0.1162], [0, 0, -0.1162]], "linear"),
+    "spherical": ("spherical (CH4-like, 5 particles)", [12.011] + 4*[1.008], tetrahedron(0.1087), "spherical"),
+    "symmetric": ("symmetric (NH3-like, 4 particles)", [14.007] + 3*[1.008], pyramid(0.1012, 106.67), "symmetric"),
+    "point": ("single particle (Ar)", [39.948], [[0, 0, 0]], "point"),
+}
+
+
+def randomRotation(rng):
+    w, x, y, z = (lambda q: q/np.linalg.norm(q))(rng.normal(size=4))  # uniform on SO(3)
+    return np.array([[1 - 2*(y*y + z*z), 2*(x*y - w*z), 2*(x*z + w*y)],
+                     [2*(x*y + w*z), 1 - 2*(x*x + z*z), 2*(y*z - w*x)],
+                     [2*(x*z - w*y), 2*(y*z + w*x), 1 - 2*(x*x + y*y)]])
+
+
+def bodySystem(kind, count, seed=1):
+    """A System of `count` randomly oriented bodies of one kind, all centred at the origin, no forces.
+
+    Water gets its three constraints (the integrator finds the bodies); the other kinds are explicit.
+    The centres are all at the origin (nothing interacts, so overlap costs nothing) because an explicit
+    body's kind comes from the moments of its initial coordinates with a tolerance of 8 ulps of the
+    largest moment: at lattice sites a few nm out, the rounding of centre + offset makes about 60 %
+    of tetrahedra and NH3 pyramids "asymmetric" or "symmetric" instead.
+    """
+    _, masses, local, _ = BODY_KINDS[kind]
+    local = np.array(local, dtype=float)
+    local -= np.average(local, axis=0, weights=masses)
+    system, positions, bodies = openmm.System(), [], []
+    rng = np.random.default_rng(seed)
+    for index in range(count):
+        rotation = randomRotation(rng)
+        body = [system.addParticle(mass) for mass in masses]
+        positions.extend(openmm.Vec3(*(rotation@r)) for r in local)
+        bodies.append(body)
+        if kind == "water":
+            for i, j in ((0, 1), (0, 2), (1, 2)):
+                system.addConstraint(body[i], body[j], float(np.linalg.norm(local[i] - local[j])))
+    return system, positions*unit.nanometer, (None if kind == "water" else bodies)
+
+
+def stockIntegrator():
+    """The floor: stock Verlet on the same System (SETTLE for water; free particles for the other kinds)."""
+    return openmm.VerletIntegrator(STEP)
+
+
+def rigidIntegrator(bodies, method):
+    integrator = openmmrigid.RigidBodyIntegrator(STEP) if bodies is None else openmmrigid.RigidBodyIntegrator(STEP, bodies)
+    integrator.setRotationMethod(method)
+    return integrator
+
+
+def foundKinds(integrator, expected, kind):
+    """'kind:count;...' of the integrator's bodies, with a warning when under 99 % are `expected`."""
+    found = {}
+    for index in range(integrator.getNumBodies()):
+        name = integrator.getBodyKind(index)
+        found[name] = found.get(name, 0) + 1
+    if found.get(expected, 0) < 0.99*integrator.getNumBodies():
+        say(f"  WARNING: {kind} bodies classified as {found}, expected {expected!r}")
+    return ";".join(f"{name}:{number}" for name, number in sorted(found.items()))
+
+
+def measureKind(kind, cpu, threads, args):
+    system, positions, bodies = bodySystem(kind, args.bodies)
+    integrators = {"stock": stockIntegrator(),
+                   "Exact": rigidIntegrator(bodies, openmmrigid.RigidBodyIntegrator.Exact),
+                   "NoSquish": rigidIntegrator(bodies, openmmrigid.RigidBodyIntegrator.NoSquish)}
+    contexts = []
+    for integrator in integrators.values():
+        context = openmm.Context(system, integrator, cpu, threadProperties(threads))
+        context.setPositions(positions)
+        context.setVelocitiesToTemperature(TEMPERATURE, 7)
+        contexts.append(context)
+    actualThreads = int(cpu.getPropertyValue(contexts[0], "Threads"))
+    steps = blockSteps(integrators["Exact"], args.body_steps, args.seconds, 10)
+    times = timeInterleaved(integrators, steps, args.repetitions)
+    kinds = foundKinds(integrators["Exact"], BODY_KINDS[kind][3], kind)
+    count = integrators["Exact"].getNumBodies()
+    ratio = statistics.median(times["Exact"])/statistics.median(times["NoSquish"])
+    rows = []
+    for method, samples in times.items():
+        median, low, high = summary(samples, 1e9/count)
+        rows.append({"kind": kind, "particles_per_body": len(BODY_KINDS[kind][1]), "bodies": count, "method": method,
+                     "threads": actualThreads, "median_ns_per_body_step": f"{median:.2f}",
+                     "exact_to_nosquish": f"{ratio:.4f}", "repetitions": args.repetitions, "steps": steps,
+                     "min_ns_per_body_step": f"{low:.2f}", "max_ns_per_body_step": f"{high:.2f}", "forces": "none",
+                     "kinds_found": kinds})
+    progress(f"  {kind} x{count} threads={actualThreads}: {steps} steps/block; "
+             + "; ".join(f"{row['method']} {float(row['median_ns_per_body_step']):.1f} ns "
+                         f"[{float(row['min_ns_per_body_step']):.1f}-{float(row['max_ns_per_body_step']):.1f}]" for row in rows))
+    del contexts
+    return rows
+
+
+def runBodies(args, cpu):
+    progress(f"Part 2: {args.bodies} bodies per kind, no forces")
+    rows = []
+    for kind in BODY_KINDS:
+        for threads in args.threads:
+            rows.extend(measureKind(kind, cpu, threads, args))
+    return rows
+
+
+def printBodyTable(rows):
+    say("\nPart 2: integrator alone (System with no forces), 2 fs, CPU platform; median ns/body/step")
+    say(f"{'kind':<36}{'bodies':>8}{'threads':>8}{'Exact':>10}{'NoSquish':>10}{'Exact/NoSq':>12}{'(stock)':>10}")
+    for kind in BODY_KINDS:
+        for threads in sorted({r["threads"] for r in rows if r["kind"] == kind}):
+            cells = {r["method"]: r for r in rows if r["kind"] == kind and r["threads"] == threads}
+            say(f"{BODY_KINDS[kind][0]:<36}{cells['Exact']['bodies']:>8}{threads:>8}"
+                f"{float(cells['Exact']['median_ns_per_body_step']):>10.1f}"
+                f"{float(cells['NoSquish']['median_ns_per_body_step']):>10.1f}"
+                f"{float(cells['Exact']['exact_to_nosquish']):>12.3f}"
+                f"{float(cells['stock']['median_ns_per_body_step']):>10.1f}")
+    say("Each includes the fixed cost of a step (the Python call, an empty force evaluation) spread over the\n"
+        "bodies. (stock): VerletIntegrator on the same System, for scale only: SETTLE for water, free\n"
+        "particles for the other kinds; nothing is subtracted.")
+
+
+# ---------------------------------------------------------------------------------------------------
+# Output
+
+def writeCsv(path, rows):
+    with open(path, "w", newline="") as stream:
+        writer = csv.DictWriter(stream, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    say(f"wrote {path.relative_to(ROOT)}")
+
+
+def plotBoxes(axes, rows):
+    keys = sorted({(r["model"], r["molecules"], r["threads"]) for r in rows})
+    width = 0.27
+    for offset, label in enumerate((STOCK, EXACT, NOSQUISH)):
+        values = [float(next(r["median_ms_per_step"] for r in rows if (r["model"], r["molecules"], r["threads"]) == key
+                             and r["integrator"] == label)) for key in keys]
+        bars = axes.bar(np.arange(len(keys)) + (offset - 1)*width, values, width, label=label)
+        if label != STOCK:
+            ratios = [next(r["ratio_to_stock"] for r in rows if (r["model"], r["molecules"], r["threads"]) == key
+                           and r["integrator"] == label) for key in keys]
+            axes.bar_label(bars, [f"{float(x):.2f}" for x in ratios], fontsize=6, rotation=90, padding=2)
+    axes.set_xticks(np.arange(len(keys)), [f"{MODEL_NAMES[m]}\n{n}, {t} thr" for m, n, t in keys], fontsize=7)
+    axes.set_yscale("log")
+    axes.set_ylabel("ms/step (median)")
+    axes.set_title("Water boxes, PME, 2 fs (labels: ratio to stock)", fontsize=9)
+    axes.legend(fontsize=7)
+
+
+def plotBodies(axes, rows):
+    kinds = [kind for kind in BODY_KINDS if any(r["kind"] == kind for r in rows)]
+    series = sorted({(r["method"], r["threads"]) for r in rows if r["method"] != "stock"}, key=lambda s: (s[1], s[0]))
+    width = 0.8/len(series)
+    for offset, (method, threads) in enumerate(series):
+        values = [float(next(r["median_ns_per_body_step"] for r in rows
+                             if r["kind"] == kind and r["method"] == method and r["threads"] == threads)) for kind in kinds]
+        axes.bar(np.arange(len(kinds)) + (offset - (len(series) - 1)/2)*width, values, width,
+                 label=f"{method}, {threads} thr")
+    axes.set_xticks(np.arange(len(kinds)), [BODY_KINDS[kind][0].replace(" (", "\n(") for kind in kinds], fontsize=7)
+    axes.set_ylabel("ns/body/step (median)")
+    axes.set_title(f"Integrator alone, no forces, {rows[0]['bodies']} bodies per kind", fontsize=9)
+    axes.legend(fontsize=7)
+
+
+def plot(path, boxRows, bodyRows, title):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    panels = [(plotBoxes, boxRows), (plotBodies, bodyRows)]
+    panels = [(function, rows) for function, rows in panels if rows]
+    figure, axes = plt.subplots(len(panels), 1, figsize=(10, 4.2*len(panels)), squeeze=False)
+    for (function, rows), ax in zip(panels, axes[:, 0]):
+        function(ax, rows)
+    figure.suptitle(title, fontsize=9)
+    figure.tight_layout()
+    figure.savefig(path, dpi=130)
+    plt.close(figure)
+    say(f"wrote {path.relative_to(ROOT)}")
+
+
+def main():
+    global LOG
+    args = parseArguments()
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    LOG = open(RESULTS / "step_cost.log", "w")
+    cpu = openmm.Platform.getPlatformByName("CPU")
+    default = cpu.getPropertyDefaultValue("Threads")
+    args.threads = list(dict.fromkeys(default if t == "default" else str(int(t)) for t in args.threads))
+    printHeader(args, cpu)
+    start = time.perf_counter()
+    boxRows = runBoxes(args, cpu) if args.only != "bodies" else []
+    bodyRows = runBodies(args, cpu) if args.only != "boxes" else []
+    if boxRows:
+        printBoxTable(boxRows)
+    if bodyRows:
+        printBodyTable(bodyRows)
+    say()
+    if boxRows:
+        writeCsv(RESULTS / "step_cost.csv", boxRows)
+    if bodyRows:
+        writeCsv(RESULTS / "integrator_only.csv", bodyRows)
+    plot(RESULTS / "step_cost.png", boxRows, bodyRows,
+         f"openmm-rigid step cost, {processorName()}, {os.cpu_count()} CPUs, OpenMM {openmm.version.full_version}, "
+         f"{datetime.date.today()}{' (quick)' if args.quick else ''}")
+    say(f"total {time.perf_counter() - start:.0f} s; load average now {loadAverage()}")
+
+
+if __name__ == "__main__":
+    main()
