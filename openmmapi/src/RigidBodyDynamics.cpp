@@ -201,7 +201,8 @@ void RigidBodyDynamics::rotate(const RigidBody& body, BodyState& state, double d
     if (method == RigidBodyIntegrator::NoSquish && body.kind != RigidBody::Linear)
         noSquishRotate(body.moments, dt, state.attitude, bodyMomentum);
     else {
-        FreeRotor rotor(body.moments, bodyAngularVelocity(body, bodyMomentum), state.attitude);
+        // The attitude is kept orthonormal here and the momenta were checked finite in firstHalf().
+        FreeRotor rotor(body.moments, bodyAngularVelocity(body, bodyMomentum), state.attitude, FreeRotor::Automatic, false);
         Vector3 omega;
         rotor.evolve(dt, omega, state.attitude);
     }

@@ -57,10 +57,13 @@ public:
      * @param omega           the angular velocity in the body (principal-axis) frame at t = 0
      * @param attitude        the lab-to-body rotation matrix A(0), orthonormal with determinant +1
      * @param representation  how an asymmetric top evaluates its precession angle (see the file comment)
+     * @param checkInput      whether to check that the input is finite and the attitude a rotation. Only
+     *                        a caller that guarantees both (the integrator, whose attitudes are kept
+     *                        orthonormal and whose momenta are checked every step) may skip it.
      * @throws std::invalid_argument naming the problem, for non-finite or inconsistent input
      */
     FreeRotor(const Vector3& moments, const Vector3& omega, const Matrix3& attitude = identityMatrix(),
-              Representation representation = Automatic);
+              Representation representation = Automatic, bool checkInput = true);
 
     /**
      * The state at time t (any sign, measured in the time unit of omega).
@@ -133,12 +136,13 @@ private:
 };
 
 inline FreeRotor::FreeRotor(const Vector3& moments, const Vector3& omega, const Matrix3& attitude,
-                            Representation requested) :
+                            Representation requested, bool checkInput) :
         moments(moments), omega0(omega), attitude0(attitude), representation(Automatic), steady(false),
         uniqueAxis(-1), symmetricPrecession(0.0), m(0.0) {
     if (requested != Automatic && requested != ThetaSeries && requested != EllipticIntegral)
         throw std::invalid_argument("FreeRotor: unknown representation " + std::to_string((int) requested));
-    validate(moments, omega, attitude);
+    if (checkInput)
+        validate(moments, omega, attitude);
     classify();
     if (kind == Linear)
         for (int k = 0; k < 3; k++)
