@@ -8,18 +8,20 @@ RigidBodyIntegrator (Exact) and RigidBodyIntegrator (NoSquish), all at 2 fs. Aft
 each, blocks of `integrator.step(n)` are timed with time.perf_counter(), interleaved (A B C A B C ...);
 nothing else is inside the timed region. Reported: the median ms/step of each and its ratio to stock.
 
-Part 2, the integrator alone: Systems of N rigid bodies with no forces at all (a System with
-particles and, for water, its constraints; the cheapest force evaluation there is, cheaper than a
-zero-energy CustomExternalForce, which still loops over the particles), random orientations,
-velocities from setVelocitiesToTemperature(300 K). Body kinds: water (TIP3P geometry, asymmetric,
-bodies found from the constraints) and, as explicit bodies, linear CO2 (3 collinear particles), a
-spherical CH4-like top (centre + 4 tetrahedral H), a symmetric NH3-like top (4 particles) and single
-particles. Reported: median ns/body/step for Exact and NoSquish (interleaved) and their ratio. This
-includes the fixed cost of a step (the Python call, an empty force evaluation), spread over N bodies.
+Part 2, the integrator alone: Systems of N (8000) rigid bodies with no forces at all (a System with
+particles and, for water, its constraints: the cheapest force evaluation there is; a zero-energy
+CustomExternalForce still loops over the particles, about 28 ns/particle/step more on one thread),
+random orientations, velocities from setVelocitiesToTemperature(300 K). Body kinds: water (TIP3P
+geometry, asymmetric, bodies found from the constraints) and, as explicit bodies, linear CO2 (3
+collinear particles), a spherical CH4-like top (centre + 4 tetrahedral H), a symmetric NH3-like top
+(4 particles) and single particles. Reported: median ns/body/step for Exact and NoSquish (interleaved
+with stock VerletIntegrator on the same System, shown for scale only) and Exact/NoSquish. This
+includes the fixed cost of a step (the Python call, an empty force evaluation), spread over N bodies;
+the kinds the integrator found are checked and written to the CSV.
 
 Both parts run with one thread and with the CPU platform's default thread count (property Threads).
 
-    python benchmarks/step_cost.py            # full: about 15 minutes on 2 cores
+    python benchmarks/step_cost.py            # full: about 15 to 18 minutes on 2 cores
     python benchmarks/step_cost.py --quick    # small sizes, short blocks: under 2 minutes
 
 Writes benchmarks/results/step_cost.csv, integrator_only.csv, step_cost.png and step_cost.log (a
@@ -40,11 +42,16 @@ import sys
 import time
 from pathlib import Path
 
+import matplotlib
 import numpy as np
 import openmm
 from openmm import app, unit
 
 import openmmrigid
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402 (after choosing the backend)
+import matplotlib.ticker  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 RESULTS = ROOT / "benchmarks" / "results"
@@ -141,7 +148,8 @@ def parseArguments():
     parser.add_argument("--steps", type=int,
                         help="steps per timed block in the water boxes (default: chosen so a block takes --seconds)")
     parser.add_argument("--body-steps", type=int, help="steps per timed block in part 2 (default: chosen likewise)")
-    parser.add_argument("--seconds", type=float, help="target seconds per timed block (default 2, quick 0.25)")
+    parser.add_argument("--seconds", type=float,
+                        help="target seconds per timed block in the boxes, half that in part 2 (default 2, quick 0.25)")
     parser.add_argument("--threads", nargs="+",
                         help="CPU thread counts; 'default' is the platform's default, Threads as OpenMM "
                              "chooses it (default: 1 default; a count given twice runs once)")
@@ -153,6 +161,7 @@ def parseArguments():
     args.seconds = args.seconds or (0.25 if args.quick else 2.0)
     args.threads = args.threads or ["1", "default"]
     args.equilibrationSteps = 100 if args.quick else 500
+    args.minimizeIterations = 100 if args.quick else 200
     for threads in args.threads:
         if threads != "default" and not (threads.isdigit() and int(threads) > 0):
             parser.error(f"--threads: {threads!r} is neither a positive integer nor 'default'")
@@ -171,7 +180,11 @@ def timeBlock(integrator, steps):
 
 
 def secondsPerStep(integrator, target):
-    """A rough cost per step: time blocks of 1, 4, 16, ... steps until one takes a tenth of the target."""
+    """A rough cost per step: time blocks of 1, 4, 16, ... steps until one takes a tenth of the target.
+
+    Two untimed steps first: a Context's first step also sets things up (bodies, neighbour lists).
+    """
+    integrator.step(2)
     steps = 1
     while True:
         elapsed = timeBlock(integrator, steps)
@@ -218,13 +231,13 @@ def buildBox(model, molecules):
     return modeller, system
 
 
-def equilibratedState(modeller, system, cpu, steps):
-    """Minimize, then run `steps` steps of LangevinMiddleIntegrator at 300 K (default threads)."""
+def equilibratedState(modeller, system, cpu, steps, iterations):
+    """Minimize (at most `iterations`), then run `steps` steps of LangevinMiddleIntegrator at 300 K (default threads)."""
     integrator = openmm.LangevinMiddleIntegrator(TEMPERATURE, 1/unit.picosecond, STEP)
     integrator.setRandomNumberSeed(2024)
     context = openmm.Context(system, integrator, cpu)
     context.setPositions(modeller.positions)
-    openmm.LocalEnergyMinimizer.minimize(context, 10, 500)
+    openmm.LocalEnergyMinimizer.minimize(context, 10, iterations)
     context.setVelocitiesToTemperature(TEMPERATURE, 2024)
     integrator.step(steps)
     return context.getState(getPositions=True, getVelocities=True, enforcePeriodicBox=True)
@@ -272,10 +285,13 @@ def runBoxes(args, cpu):
     rows = []
     for model in args.models:
         for molecules in args.sizes:
-            progress(f"{MODEL_NAMES[model]} {molecules}: building, minimizing, {args.equilibrationSteps} Langevin steps")
+            progress(f"{MODEL_NAMES[model]} {molecules}: building, minimizing ({args.minimizeIterations} iterations), "
+                     f"{args.equilibrationSteps} Langevin steps")
+            started = time.perf_counter()
             modeller, system = buildBox(model, molecules)
             waters = modeller.topology.getNumResidues()
-            state = equilibratedState(modeller, system, cpu, args.equilibrationSteps)
+            state = equilibratedState(modeller, system, cpu, args.equilibrationSteps, args.minimizeIterations)
+            progress(f"  {waters} waters, {system.getNumParticles()} particles; ready in {time.perf_counter() - started:.0f} s")
             for threads in args.threads:
                 rows.extend(measureBox(model, waters, system, state, cpu, threads, args))
     return rows
@@ -388,7 +404,7 @@ def measureKind(kind, cpu, threads, args):
         context.setVelocitiesToTemperature(TEMPERATURE, 7)
         contexts.append(context)
     actualThreads = int(cpu.getPropertyValue(contexts[0], "Threads"))
-    steps = blockSteps(integrators["Exact"], args.body_steps, args.seconds, 10)
+    steps = blockSteps(integrators["Exact"], args.body_steps, args.seconds/2, 10)  # steadier than the boxes
     times = timeInterleaved(integrators, steps, args.repetitions)
     kinds = foundKinds(integrators["Exact"], BODY_KINDS[kind][3], kind)
     count = integrators["Exact"].getNumBodies()
@@ -398,7 +414,7 @@ def measureKind(kind, cpu, threads, args):
         median, low, high = summary(samples, 1e9/count)
         rows.append({"kind": kind, "particles_per_body": len(BODY_KINDS[kind][1]), "bodies": count, "method": method,
                      "threads": actualThreads, "median_ns_per_body_step": f"{median:.2f}",
-                     "exact_to_nosquish": f"{ratio:.4f}", "repetitions": args.repetitions, "steps": steps,
+                     "exact_to_nosquish": "" if method == "stock" else f"{ratio:.4f}", "repetitions": args.repetitions, "steps": steps,
                      "min_ns_per_body_step": f"{low:.2f}", "max_ns_per_body_step": f"{high:.2f}", "forces": "none",
                      "kinds_found": kinds})
     progress(f"  {kind} x{count} threads={actualThreads}: {steps} steps/block; "
@@ -457,6 +473,9 @@ def plotBoxes(axes, rows):
             axes.bar_label(bars, [f"{float(x):.2f}" for x in ratios], fontsize=6, rotation=90, padding=2)
     axes.set_xticks(np.arange(len(keys)), [f"{MODEL_NAMES[m]}\n{n}, {t} thr" for m, n, t in keys], fontsize=7)
     axes.set_yscale("log")
+    axes.yaxis.set_major_formatter(matplotlib.ticker.ScalarFormatter())
+    axes.yaxis.set_minor_formatter(matplotlib.ticker.ScalarFormatter())
+    axes.tick_params(axis="y", which="both", labelsize=7)
     axes.set_ylabel("ms/step (median)")
     axes.set_title("Water boxes, PME, 2 fs (labels: ratio to stock)", fontsize=9)
     axes.legend(fontsize=7)
@@ -464,13 +483,17 @@ def plotBoxes(axes, rows):
 
 def plotBodies(axes, rows):
     kinds = [kind for kind in BODY_KINDS if any(r["kind"] == kind for r in rows)]
-    series = sorted({(r["method"], r["threads"]) for r in rows if r["method"] != "stock"}, key=lambda s: (s[1], s[0]))
+    threadCounts = sorted({r["threads"] for r in rows})
+    series = [(method, threads) for threads in threadCounts for method in ("stock", "Exact", "NoSquish")]
+    colours = {"stock": "C0", "Exact": "C1", "NoSquish": "C2"}
     width = 0.8/len(series)
     for offset, (method, threads) in enumerate(series):
         values = [float(next(r["median_ns_per_body_step"] for r in rows
                              if r["kind"] == kind and r["method"] == method and r["threads"] == threads)) for kind in kinds]
-        axes.bar(np.arange(len(kinds)) + (offset - (len(series) - 1)/2)*width, values, width,
-                 label=f"{method}, {threads} thr")
+        label = "stock Verlet (for scale)" if method == "stock" else method
+        axes.bar(np.arange(len(kinds)) + (offset - (len(series) - 1)/2)*width, values, width, color=colours[method],
+                 hatch="" if threads == threadCounts[0] else "//", edgecolor="white", linewidth=0,
+                 label=f"{label}, {threads} thr")
     axes.set_xticks(np.arange(len(kinds)), [BODY_KINDS[kind][0].replace(" (", "\n(") for kind in kinds], fontsize=7)
     axes.set_ylabel("ns/body/step (median)")
     axes.set_title(f"Integrator alone, no forces, {rows[0]['bodies']} bodies per kind", fontsize=9)
@@ -478,9 +501,6 @@ def plotBodies(axes, rows):
 
 
 def plot(path, boxRows, bodyRows, title):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     panels = [(plotBoxes, boxRows), (plotBodies, bodyRows)]
     panels = [(function, rows) for function, rows in panels if rows]
     figure, axes = plt.subplots(len(panels), 1, figsize=(10, 4.2*len(panels)), squeeze=False)

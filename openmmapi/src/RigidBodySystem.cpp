@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
-#include <limits>
 #include <map>
 #include <numeric>
 #include <sstream>
@@ -55,7 +54,10 @@ void RigidBody::setShape(const vector<Vector3>& centred) {
             }
             moments[k] = moment;
         }
-        const double tolerance = 8*numeric_limits<double>::epsilon()*largest;
+        // The reported kind treats moments within 1e-10 relative as equal: coordinates a few nm from the
+        // origin carry rounding of about 1e-14 relative into the moments of a truly symmetric shape.
+        // The dynamics is unaffected: FreeRotor takes the exact formula for the moments as they are.
+        const double tolerance = 1e-10*largest;
         bool equal01 = moments[1] - moments[0] <= tolerance, equal12 = moments[2] - moments[1] <= tolerance;
         kind = (equal01 && equal12 ? Spherical : (equal01 || equal12 ? Symmetric : Asymmetric));
     }

@@ -198,3 +198,29 @@ def test_set_velocities_to_temperature(platformName):
         assert abs((current[i] - current[j]) @ (velocities[i] - velocities[j])) < 1e-10
     temperature = integrator.computeSystemTemperature().value_in_unit(unit.kelvin)
     assert 150 < temperature < 450
+
+
+@pytest.mark.parametrize("platformName", PLATFORMS)
+def test_kinds_of_symmetric_bodies_far_from_the_origin(platformName):
+    """Rounding of coordinates a few nm from the origin must not turn a symmetric shape asymmetric."""
+    rng = np.random.default_rng(11)
+    tetrahedron = 0.1/np.sqrt(3.0)*np.array([[1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]], dtype=float)
+    angles = 2*np.pi*np.arange(3)/3
+    pyramid = np.vstack([[0.0, 0.0, 0.04], np.column_stack([0.094*np.cos(angles), 0.094*np.sin(angles), np.zeros(3)])])
+    shapes = [("spherical", tetrahedron, [1.0, 1.0, 1.0, 1.0]), ("symmetric", pyramid, [14.0, 1.0, 1.0, 1.0])]
+    system = openmm.System()
+    positions, bodies, expected = [], [], []
+    for k in range(40):
+        kind, shape, masses = shapes[k % 2]
+        rotation, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+        centre = rng.uniform(2.0, 6.0, size=3)
+        members = []
+        for point, mass in zip(shape @ rotation.T + centre, masses):
+            members.append(system.addParticle(mass))
+            positions.append(point)
+        bodies.append(members)
+        expected.append(kind)
+    integrator = openmmrigid.RigidBodyIntegrator(0.001, bodies)
+    context = make_context(system, integrator, platformName)
+    context.setPositions(np.array(positions))
+    assert [integrator.getBodyKind(b) for b in range(len(bodies))] == expected
