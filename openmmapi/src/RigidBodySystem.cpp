@@ -141,23 +141,24 @@ void RigidBodySystem::findConstraintBodies(const System& system) {
         system.getConstraintParameters(c, i, j, distance);
         parent[root(i)] = root(j);
     }
-    map<int, vector<int> > clusters;
-    map<int, int> constraintCount;
+    // Each cluster's members and constraints, gathered in one pass over each list.
+    map<int, vector<int> > clusters, clusterConstraints;
     for (int c = 0; c < system.getNumConstraints(); c++) {
         int i, j;
         double distance;
         system.getConstraintParameters(c, i, j, distance);
-        constraintCount[root(i)]++;
+        clusterConstraints[root(i)].push_back(c);
     }
     for (int i = 0; i < numParticles; i++)
-        if (constraintCount.count(root(i)))
+        if (clusterConstraints.count(root(i)))
             clusters[root(i)].push_back(i);
     for (auto& entry : clusters) {
         const vector<int>& members = entry.second;
+        const vector<int>& constraints = clusterConstraints[entry.first];
         int n = members.size();
         // A cluster of n >= 3 particles is rigid when its constraints fix all 3n - 6 internal degrees
         // of freedom; a chain such as X-H bonds in a flexible solute has fewer and stays free.
-        if (n < 3 || constraintCount[entry.first] < 3*n - 6)
+        if (n < 3 || (int) constraints.size() < 3*n - 6)
             continue;
         RigidBody body;
         body.particles = members;
@@ -166,12 +167,11 @@ void RigidBodySystem::findConstraintBodies(const System& system) {
             bodyOfParticle[p] = b;
         // When every pair is constrained the distances fix the shape: keep them for checkBody().
         map<pair<int, int>, double> distances;
-        for (int c = 0; c < system.getNumConstraints(); c++) {
+        for (int c : constraints) {
             int i, j;
             double distance;
             system.getConstraintParameters(c, i, j, distance);
-            if (bodyOfParticle[i] == b)
-                distances[{min(i, j), max(i, j)}] = distance;
+            distances[{min(i, j), max(i, j)}] = distance;
         }
         if ((int) distances.size() == n*(n - 1)/2) {
             body.pairDistances.resize(n*n, 0.0);
