@@ -23,6 +23,14 @@ struct RigidBody;
  * instead, for comparison. Particles that belong to no body move by velocity Verlet, with the
  * constraints among them applied to positions and velocities.
  *
+ * That kick-drift-kick step is the default splitting (Verlet). setSplitting() chooses a longer
+ * sequence of kicks and exact drifts instead, with one force evaluation after each drift: the
+ * optimized two-stage scheme of I. P. Omelyan, I. M. Mryglod and R. Folk, Phys. Rev. E 65, 056706
+ * (2002) (Omelyan2, second order), Yoshida's fourth-order triple jump (H. Yoshida, Phys. Lett. A
+ * 150, 262 (1990)) (Yoshida4), or the optimized fourth-order Forest-Ruth-like scheme of Omelyan,
+ * Mryglod and Folk, Comput. Phys. Commun. 146, 188 (2002) (Omelyan4). Bodies and free particles
+ * follow the same sequence.
+ *
  * The bodies are either found in the System when the Context is created (every cluster of three or
  * more particles that its constraints hold rigid: the rigid waters of TIP3P, SPC/E, TIP4P-Ew and
  * TIP5P, or any other rigid constraint cluster), or given explicitly as lists of particle indices.
@@ -63,6 +71,30 @@ public:
      *                  Particles in no body move freely.
      */
     RigidBodyIntegrator(double stepSize, const std::vector<std::vector<int> >& bodies);
+    /**
+     * The sequence of kicks and free drifts that makes one step. Each starts with a kick that reuses
+     * the forces from the end of the previous step and evaluates the forces once after every drift.
+     */
+    enum Splitting {
+        /** Velocity Verlet: kick dt/2, drift dt, kick dt/2. Second order, one force evaluation per step. */
+        Verlet = 0,
+        /**
+         * The optimized two-stage scheme of Omelyan, Mryglod and Folk (2002): kick lambda dt, drift dt/2,
+         * kick (1 - 2 lambda) dt, drift dt/2, kick lambda dt with lambda = 0.1931833275037836. Second
+         * order with a smaller error than Verlet at the same step; two force evaluations per step.
+         */
+        Omelyan2 = 1,
+        /**
+         * Yoshida's triple jump: Verlet steps of w1 dt, w0 dt and w1 dt with w1 = 1/(2 - 2^(1/3)) and
+         * w0 = 1 - 2 w1. Fourth order; three force evaluations per step.
+         */
+        Yoshida4 = 2,
+        /**
+         * The optimized fourth-order Forest-Ruth-like scheme of Omelyan, Mryglod and Folk (2002), in
+         * its velocity form: five kicks and four drifts. Fourth order; four force evaluations per step.
+         */
+        Omelyan4 = 3
+    };
     /** Get the method used to advance the orientation of each body. */
     RotationMethod getRotationMethod() const {
         return rotationMethod;
@@ -73,6 +105,22 @@ public:
      * @throws OpenMMException if the value is not a RotationMethod
      */
     void setRotationMethod(RotationMethod method);
+    /** Get the splitting: the sequence of kicks and drifts that makes one step. */
+    Splitting getSplitting() const {
+        return splitting;
+    }
+    /**
+     * Set the splitting: the sequence of kicks and drifts that makes one step.
+     *
+     * @throws OpenMMException if the value is not a Splitting
+     */
+    void setSplitting(Splitting splitting);
+    /**
+     * Get the number of force evaluations per step that the splitting takes (1 for Verlet, 2 for
+     * Omelyan2, 3 for Yoshida4, 4 for Omelyan4). The forces at the end of a step are those the next
+     * step starts with, so this is the number of drifts in a step.
+     */
+    int getNumForceEvaluations() const;
     /** Get whether the bodies were given explicitly (rather than found from the System's constraints). */
     bool hasExplicitBodies() const {
         return explicitBodies;
@@ -154,6 +202,7 @@ private:
     std::vector<std::vector<int> > bodies;
     bool explicitBodies;
     RotationMethod rotationMethod;
+    Splitting splitting;
     bool bound, forcesAreValid, needsProjection;
     OpenMM::Kernel kernel;
 };

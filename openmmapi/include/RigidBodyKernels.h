@@ -31,8 +31,10 @@ public:
      */
     virtual void initialize(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) = 0;
     /**
-     * Execute the kernel: one step (half kick, drift, forces, half kick). On entry the context holds
-     * the forces at the current positions, and the bodies agree with them (see project()).
+     * Execute the kernel: one step of the integrator's splitting (internal/Splitting.h), with the
+     * virtual sites placed and the forces evaluated after every drift. On entry the context holds
+     * the forces at the current positions, and the bodies agree with them (see project()); on exit
+     * it holds the forces at the new positions.
      *
      * @param context     the context in which to execute this kernel
      * @param integrator  the RigidBodyIntegrator this kernel is being used for

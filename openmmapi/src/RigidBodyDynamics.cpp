@@ -201,7 +201,7 @@ void RigidBodyDynamics::rotate(const RigidBody& body, BodyState& state, double d
     if (method == RigidBodyIntegrator::NoSquish && body.kind != RigidBody::Linear)
         noSquishRotate(body.moments, dt, state.attitude, bodyMomentum);
     else {
-        // The attitude is kept orthonormal here and the momenta were checked finite in firstHalf().
+        // The attitude is kept orthonormal here and the momenta were checked finite in kickAndDrift().
         FreeRotor rotor(body.moments, bodyAngularVelocity(body, bodyMomentum), state.attitude, FreeRotor::Automatic, false);
         Vector3 omega;
         rotor.evolve(dt, omega, state.attitude);
@@ -209,92 +209,106 @@ void RigidBodyDynamics::rotate(const RigidBody& body, BodyState& state, double d
     reorthonormalize(state.attitude);
 }
 
-void RigidBodyDynamics::firstHalf(vector<Vec3>& positions, vector<Vec3>& velocities, const vector<Vec3>& forces,
-                                  double dt, RigidBodyIntegrator::RotationMethod method, double constraintTolerance) {
+void RigidBodyDynamics::refreshMomenta(int b, const vector<Vec3>& positions, const vector<Vec3>& velocities) {
+    // Rebuilding the momenta from the particles at every step would not do: the few-ulp mismatch
+    // between the moments and the body coordinates would then scale L by the same factor every
+    // step, a slow systematic drift. So they are rebuilt only when the velocities were changed.
+    const RigidBody& body = system.getBodies()[b];
+    BodyState& state = states[b];
+    const int n = body.particles.size();
+    bool changed = false;
+    for (int i = 0; i < n && !changed; i++)
+        changed = (velocities[body.particles[i]] != writtenVelocities[body.particles[i]]);
+    if (!changed)
+        return;
+    Vec3 momentum, angularMomentum;
+    for (int i = 0; i < n; i++)
+        momentum += velocities[body.particles[i]]*body.masses[i];
+    Vec3 velocity = momentum/body.mass;
+    for (int i = 0; i < n; i++) {
+        int p = body.particles[i];
+        angularMomentum += (positions[p] - toVec3(state.center)).cross(velocities[p] - velocity)*body.masses[i];
+    }
+    state.velocity = toVector(velocity);
+    state.angularMomentum = toVector(angularMomentum);
+}
+
+void RigidBodyDynamics::forceAndTorque(const RigidBody& body, const BodyState& state, const vector<Vec3>& positions,
+                                       const vector<Vec3>& forces, Vec3& force, Vec3& torque) const {
+    force = torque = Vec3();
+    for (size_t i = 0; i < body.particles.size(); i++) {
+        int p = body.particles[i];
+        force += forces[p];
+        torque += (positions[p] - toVec3(state.center)).cross(forces[p]);
+    }
+}
+
+void RigidBodyDynamics::driftBody(int b, double h, RigidBodyIntegrator::RotationMethod method, vector<Vec3>& positions) {
+    const RigidBody& body = system.getBodies()[b];
+    BodyState& state = states[b];
+    for (int k = 0; k < 3; k++)
+        state.center[k] += h*state.velocity[k];
+    rotate(body, state, h, method);
+    for (size_t i = 0; i < body.particles.size(); i++)
+        positions[body.particles[i]] = toVec3(state.center) + toVec3(multiplyTransposed(state.attitude, body.bodyCoordinates[i]));
+}
+
+void RigidBodyDynamics::kickAndDrift(vector<Vec3>& positions, vector<Vec3>& velocities, const vector<Vec3>& forces,
+                                     double kick, double drift, RigidBodyIntegrator::RotationMethod method,
+                                     double constraintTolerance) {
     const vector<RigidBody>& bodies = system.getBodies();
     forEachBody([&](int b) {
         const RigidBody& body = bodies[b];
         BodyState& state = states[b];
-        // The momenta are the state's, unless something changed the particle velocities since this
-        // class wrote them (a CMMotionRemover, which does so without telling the integrator): then
-        // they are taken from the particles. Rebuilding them every step would not do: the few-ulp
-        // mismatch between the moments and the body coordinates would then scale L by the same
-        // factor every step, a slow systematic drift.
-        const int n = body.particles.size();
-        bool changed = false;
-        for (int i = 0; i < n && !changed; i++)
-            changed = (velocities[body.particles[i]] != writtenVelocities[body.particles[i]]);
-        Vec3 velocity = toVec3(state.velocity), angularMomentum = toVec3(state.angularMomentum), force, torque;
-        if (changed) {
-            Vec3 momentum;
-            angularMomentum = Vec3();
-            for (int i = 0; i < n; i++)
-                momentum += velocities[body.particles[i]]*body.masses[i];
-            velocity = momentum/body.mass;
-            for (int i = 0; i < n; i++) {
-                int p = body.particles[i];
-                angularMomentum += (positions[p] - toVec3(state.center)).cross(velocities[p] - velocity)*body.masses[i];
-            }
-        }
-        for (int i = 0; i < n; i++) {
-            int p = body.particles[i];
-            force += forces[p];
-            torque += (positions[p] - toVec3(state.center)).cross(forces[p]);
-        }
-        // Half kick, then the free drift: translation and rotation.
-        velocity += force*(0.5*dt/body.mass);
-        angularMomentum += torque*(0.5*dt);
+        refreshMomenta(b, positions, velocities);
+        Vec3 force, torque;
+        forceAndTorque(body, state, positions, forces, force, torque);
+        Vec3 velocity = toVec3(state.velocity) + force*(kick/body.mass);
+        Vec3 angularMomentum = toVec3(state.angularMomentum) + torque*kick;
         if (!(isfinite(velocity.dot(velocity)) && isfinite(angularMomentum.dot(angularMomentum))))
             throw OpenMMException("RigidBodyIntegrator: body " + to_string(b) + " has a non-finite velocity, force or "
                     "torque; the simulation is unstable (try a smaller step size)");
         state.velocity = toVector(velocity);
         state.angularMomentum = toVector(angularMomentum);
-        for (int k = 0; k < 3; k++)
-            state.center[k] += dt*velocity[k];
-        rotate(body, state, dt, method);
-        for (int i = 0; i < n; i++)
-            positions[body.particles[i]] = toVec3(state.center) + toVec3(multiplyTransposed(state.attitude, body.bodyCoordinates[i]));
+        driftBody(b, drift, method, positions);
     });
     const vector<int>& free = system.getFreeParticles();
     if (constraints)
         previousPositions = positions;
     for (int p : free) {
-        velocities[p] += forces[p]*(0.5*dt*inverseMasses[p]);
-        positions[p] += velocities[p]*dt;
+        velocities[p] += forces[p]*(kick*inverseMasses[p]);
+        positions[p] += velocities[p]*drift;
     }
     if (constraints) {
         constraints->apply(previousPositions, positions, inverseMasses, constraintTolerance);
         for (int p : free)
-            velocities[p] = (positions[p] - previousPositions[p])/dt;
+            velocities[p] = (positions[p] - previousPositions[p])/drift;
     }
 }
 
-void RigidBodyDynamics::secondHalf(vector<Vec3>& positions, vector<Vec3>& velocities, const vector<Vec3>& forces,
-                                   double dt, double constraintTolerance) {
+void RigidBodyDynamics::closingKick(vector<Vec3>& positions, vector<Vec3>& velocities, const vector<Vec3>& forces,
+                                    double kick, double constraintTolerance) {
     const vector<RigidBody>& bodies = system.getBodies();
     forEachBody([&](int b) {
         const RigidBody& body = bodies[b];
         BodyState& state = states[b];
-        const int n = body.particles.size();
         Vec3 force, torque;
-        for (int i = 0; i < n; i++) {
-            int p = body.particles[i];
-            force += forces[p];
-            torque += (positions[p] - toVec3(state.center)).cross(forces[p]);
-        }
+        forceAndTorque(body, state, positions, forces, force, torque);
+        // (This rounds as kickAndDrift's kick, force*(kick/mass), does not; both are kept as they were
+        // when the two were the halves of the Verlet step, so that its trajectories stay bit for bit.)
         for (int k = 0; k < 3; k++) {
-            state.velocity[k] += 0.5*dt*force[k]/body.mass;
-            state.angularMomentum[k] += 0.5*dt*torque[k];
+            state.velocity[k] += kick*force[k]/body.mass;
+            state.angularMomentum[k] += kick*torque[k];
         }
         Vector3 omega = multiplyTransposed(state.attitude,
                 bodyAngularVelocity(body, multiply(state.attitude, state.angularMomentum)));
-        for (int i = 0; i < n; i++) {
+        for (size_t i = 0; i < body.particles.size(); i++) {
             int p = body.particles[i];
             velocities[p] = toVec3(state.velocity) + toVec3(omega).cross(positions[p] - toVec3(state.center));
         }
     });
     for (int p : system.getFreeParticles())
-        velocities[p] += forces[p]*(0.5*dt*inverseMasses[p]);
+        velocities[p] += forces[p]*(kick*inverseMasses[p]);
     if (constraints)
         constraints->applyToVelocities(positions, velocities, inverseMasses, constraintTolerance);
     writtenVelocities = velocities;

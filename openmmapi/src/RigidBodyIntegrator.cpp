@@ -1,6 +1,7 @@
 #include "RigidBodyIntegrator.h"
 #include "RigidBodyKernels.h"
 #include "internal/RigidBodySystem.h"
+#include "internal/Splitting.h"
 #include "openmm/Context.h"
 #include "openmm/OpenMMException.h"
 #include "openmm/internal/ContextImpl.h"
@@ -13,13 +14,13 @@ using namespace std;
 namespace OpenMMRigid {
 
 RigidBodyIntegrator::RigidBodyIntegrator(double stepSize) : explicitBodies(false), rotationMethod(Exact),
-        bound(false), forcesAreValid(false), needsProjection(true) {
+        splitting(Verlet), bound(false), forcesAreValid(false), needsProjection(true) {
     setStepSize(stepSize);
     setConstraintTolerance(1e-5);
 }
 
 RigidBodyIntegrator::RigidBodyIntegrator(double stepSize, const vector<vector<int> >& bodies) : bodies(bodies),
-        explicitBodies(true), rotationMethod(Exact), bound(false), forcesAreValid(false), needsProjection(true) {
+        explicitBodies(true), rotationMethod(Exact), splitting(Verlet), bound(false), forcesAreValid(false), needsProjection(true) {
     setStepSize(stepSize);
     setConstraintTolerance(1e-5);
     for (size_t b = 0; b < bodies.size(); b++)
@@ -33,6 +34,15 @@ void RigidBodyIntegrator::setRotationMethod(RotationMethod method) {
         throw OpenMMException("RigidBodyIntegrator: unknown rotation method " + to_string((int) method) +
                 "; use RigidBodyIntegrator.Exact (0) or RigidBodyIntegrator.NoSquish (1)");
     rotationMethod = method;
+}
+
+void RigidBodyIntegrator::setSplitting(Splitting value) {
+    splittingScheme(value);  // throws, naming the valid values, unless value is one
+    splitting = value;
+}
+
+int RigidBodyIntegrator::getNumForceEvaluations() const {
+    return splittingScheme(splitting).numDrifts;
 }
 
 const IntegrateRigidBodyStepKernel& RigidBodyIntegrator::getKernel() const {

@@ -173,7 +173,8 @@ RigidBodyIntegrator* asRigidBodyIntegrator(OpenMM::Integrator* integrator) {
     if ($result == NULL)
         SWIG_fail;
 }
-// getRotationMethod returns the enum as a plain int, equal to RigidBodyIntegrator.Exact or .NoSquish.
+// getRotationMethod and getSplitting return their enums as plain ints, equal to the class constants
+// (RigidBodyIntegrator.Exact, .NoSquish; .Verlet, .Omelyan2, .Yoshida4, .Omelyan4).
 
 // ---- units, as OpenMM's own wrappers handle them ----
 
@@ -213,6 +214,14 @@ J. Chem. Phys. 128, 154119 (2008)); ``RigidBodyIntegrator.NoSquish`` takes the s
 of T. F. Miller et al., J. Chem. Phys. 116, 8649 (2002) instead. Particles in no body move by
 velocity Verlet, with the constraints among them applied to positions and velocities.
 
+That kick-drift-kick step is the default splitting, ``RigidBodyIntegrator.Verlet``;
+``setSplitting()`` chooses a longer sequence of kicks and exact drifts, with one force evaluation
+after each drift: ``Omelyan2`` (the optimized second-order scheme of I. P. Omelyan, I. M. Mryglod
+and R. Folk, Phys. Rev. E 65, 056706 (2002); two force evaluations per step), ``Yoshida4``
+(Yoshida's fourth-order triple jump, Phys. Lett. A 150, 262 (1990); three) or ``Omelyan4`` (the
+optimized fourth-order Forest-Ruth-like scheme of Omelyan, Mryglod and Folk, Comput. Phys. Commun.
+146, 188 (2002); four).
+
 The bodies are either found in the System when the Context is created (every cluster of three or
 more particles that its constraints hold rigid, such as rigid water), or given explicitly as lists
 of particle indices. An explicit body takes the shape it has when the Context's positions are
@@ -247,6 +256,7 @@ Examples
 >>> integrator = RigidBodyIntegrator(2*unit.femtoseconds)                   # rigid waters etc.
 >>> integrator = RigidBodyIntegrator(0.002, [[0, 1, 2], [3, 4, 5, 6]])      # explicit bodies
 >>> integrator.setRotationMethod(RigidBodyIntegrator.NoSquish)
+>>> integrator.setSplitting(RigidBodyIntegrator.Omelyan2)                    # two forces per step
 ";
 %feature("docstring") OpenMMRigid::RigidBodyIntegrator::getRotationMethod "
 Get the method used to advance the orientation of each body.
@@ -269,6 +279,46 @@ Raises
 ------
 openmm.OpenMMException
     If method is not one of these values.
+";
+%feature("docstring") OpenMMRigid::RigidBodyIntegrator::getSplitting "
+Get the splitting: the sequence of kicks and free drifts that makes one step.
+
+Returns
+-------
+int
+    ``RigidBodyIntegrator.Verlet`` (the default), ``.Omelyan2``, ``.Yoshida4`` or ``.Omelyan4``.
+";
+%feature("docstring") OpenMMRigid::RigidBodyIntegrator::setSplitting "
+Set the splitting: the sequence of kicks and free drifts that makes one step.
+
+Each splitting starts with a kick that reuses the forces from the end of the previous step and
+evaluates the forces once after each of its drifts; bodies and free particles (with their
+constraints) follow the same sequence.
+
+Parameters
+----------
+splitting : int
+    ``RigidBodyIntegrator.Verlet``: kick dt/2, drift dt, kick dt/2 (second order, one force
+    evaluation per step). ``RigidBodyIntegrator.Omelyan2``: kick lambda dt, drift dt/2, kick
+    (1 - 2 lambda) dt, drift dt/2, kick lambda dt with lambda = 0.1931833275037836 (Omelyan, Mryglod
+    and Folk, Phys. Rev. E 65, 056706 (2002); second order, two). ``RigidBodyIntegrator.Yoshida4``:
+    Verlet steps of w1 dt, w0 dt, w1 dt with w1 = 1/(2 - 2^(1/3)), w0 = 1 - 2 w1 (Yoshida, Phys.
+    Lett. A 150, 262 (1990); fourth order, three). ``RigidBodyIntegrator.Omelyan4``: the velocity
+    form of the optimized Forest-Ruth-like scheme of Omelyan, Mryglod and Folk, Comput. Phys.
+    Commun. 146, 188 (2002) (fourth order, four).
+
+Raises
+------
+openmm.OpenMMException
+    If splitting is not one of these values.
+";
+%feature("docstring") OpenMMRigid::RigidBodyIntegrator::getNumForceEvaluations "
+Get the number of force evaluations per step that the splitting takes: 1 (Verlet), 2 (Omelyan2),
+3 (Yoshida4) or 4 (Omelyan4).
+
+Returns
+-------
+int
 ";
 %feature("docstring") OpenMMRigid::RigidBodyIntegrator::hasExplicitBodies "
 Get whether the bodies were given explicitly rather than found from the System's constraints.

@@ -13,8 +13,8 @@ namespace OpenMMRigid {
 
 namespace {
 
-/** The format written by serialize(). Version 1: the first. */
-const int CURRENT_VERSION = 1;
+/** The format written by serialize(). Version 1: the first. Version 2: adds the splitting. */
+const int CURRENT_VERSION = 2;
 
 /** The child node with the given name, or NULL if the node has none. */
 const SerializationNode* findChild(const SerializationNode& node, const string& name) {
@@ -36,6 +36,7 @@ void RigidBodyIntegratorProxy::serialize(const void* object, SerializationNode& 
     node.setDoubleProperty("constraintTolerance", integrator.getConstraintTolerance());
     node.setIntProperty("integrationForceGroups", integrator.getIntegrationForceGroups());
     node.setIntProperty("rotationMethod", integrator.getRotationMethod());
+    node.setIntProperty("splitting", integrator.getSplitting());
     // An explicit empty list of bodies (every particle free) differs from "find the bodies in the
     // System", so the flag is written on its own, not inferred from the number of bodies.
     node.setBoolProperty("explicitBodies", integrator.hasExplicitBodies());
@@ -75,6 +76,9 @@ void* RigidBodyIntegratorProxy::deserialize(const SerializationNode& node) const
     integrator->setIntegrationForceGroups(node.getIntProperty("integrationForceGroups", integrator->getIntegrationForceGroups()));
     int method = node.getIntProperty("rotationMethod", integrator->getRotationMethod());
     integrator->setRotationMethod(static_cast<RigidBodyIntegrator::RotationMethod>(method));
+    // Version 1 files have no splitting: they were written when every step was Verlet.
+    int splitting = node.getIntProperty("splitting", RigidBodyIntegrator::Verlet);
+    integrator->setSplitting(static_cast<RigidBodyIntegrator::Splitting>(splitting));
     return integrator.release();
 }
 

@@ -18,17 +18,23 @@ class ThreadPool;
 namespace OpenMMRigid {
 
 /**
- * The physics of one RigidBodyIntegrator step on plain arrays of positions, velocities and forces
- * (every platform's kernel extracts its arrays and calls this class). A step is split in two around
- * the force evaluation that the caller performs:
+ * The physics of a RigidBodyIntegrator step on plain arrays of positions, velocities and forces
+ * (every platform's kernel extracts its arrays and calls this class). A step is a sequence of
+ * stages (internal/Splitting.h) with a force evaluation, which the caller performs, between them:
  *
- *   firstHalf():  for each body, V and L (lab frame) from the particle velocities, a half kick
- *                 V += F dt / 2M, L += tau dt / 2, the free drift R += V dt and the rotation of the
- *                 attitude (exact free rotor or NO_SQUISH), and the particles placed at R + A^T b;
- *                 free particles: half kick and drift, with their constraints applied to positions.
- *   secondHalf(): after the caller computed forces at the new positions, the second half kick, and
- *                 the rigid velocities v = V + omega x (r - R) written to the particles; free
- *                 particles: half kick and velocity constraints.
+ *   kickAndDrift(a, b):  for each body, a kick V += F a / M, L += tau a (lab frame) followed by the
+ *                        free drift R += V b and the rotation of the attitude for a time b (exact
+ *                        free rotor or NO_SQUISH), and the particles placed at R + A^T b_i; free
+ *                        particles: kick and drift, with their constraints applied to positions.
+ *   closingKick(a):      the last kick of the step, after which the rigid velocities
+ *                        v = V + omega x (r - R) are written to the body particles; free particles:
+ *                        kick and velocity constraints.
+ *
+ * Each is one pass over the bodies (on the thread pool, if there is one). Between them the body
+ * momenta live in this class; the particle velocities of the bodies are written once per step.
+ * (The free particles' velocities are constrained only after the closing kick: a velocity projection
+ * before a drift would change nothing, since the drift's position constraints absorb any velocity
+ * component along the constraint gradients.)
  *
  * Forces and torques are summed over the massive particles of each body only: the force on a virtual
  * site has already been distributed to its parents.
@@ -47,11 +53,30 @@ public:
      * same linear and angular momentum. Explicit bodies take their shape from the first positions.
      */
     void project(std::vector<OpenMM::Vec3>& positions, std::vector<OpenMM::Vec3>& velocities);
-    void firstHalf(std::vector<OpenMM::Vec3>& positions, std::vector<OpenMM::Vec3>& velocities,
-                   const std::vector<OpenMM::Vec3>& forces, double dt, RigidBodyIntegrator::RotationMethod method,
-                   double constraintTolerance);
-    void secondHalf(std::vector<OpenMM::Vec3>& positions, std::vector<OpenMM::Vec3>& velocities,
-                    const std::vector<OpenMM::Vec3>& forces, double dt, double constraintTolerance);
+    /**
+     * One stage of a step: kick every body and free particle by the forces, then let it move freely.
+     * The body momenta are those the previous stage left, unless something other than this class
+     * changed the body particles' velocities since closingKick() or project() wrote them (a
+     * CMMotionRemover, which does so without telling the integrator): then they are taken from
+     * the particles.
+     *
+     * @param kick                 the time by which the forces change the momenta, in ps
+     * @param drift                the time of the free motion, in ps (may be negative)
+     * @param method               how the bodies rotate during the drift
+     * @param constraintTolerance  the tolerance of the constraints among free particles
+     */
+    void kickAndDrift(std::vector<OpenMM::Vec3>& positions, std::vector<OpenMM::Vec3>& velocities,
+                      const std::vector<OpenMM::Vec3>& forces, double kick, double drift,
+                      RigidBodyIntegrator::RotationMethod method, double constraintTolerance);
+    /**
+     * The last kick of a step: kick every body and free particle by the forces, write the bodies'
+     * rigid velocities to their particles and apply the velocity constraints of the free particles.
+     *
+     * @param kick                 the time by which the forces change the momenta, in ps
+     * @param constraintTolerance  the tolerance of the constraints among free particles
+     */
+    void closingKick(std::vector<OpenMM::Vec3>& positions, std::vector<OpenMM::Vec3>& velocities,
+                     const std::vector<OpenMM::Vec3>& forces, double kick, double constraintTolerance);
     /**
      * Split the kinetic energy of the velocities: the translation of the bodies' centres plus the free
      * particles, and the rest of the bodies' kinetic energy (their rotation, for rigid velocities).
@@ -63,6 +88,13 @@ private:
         Matrix3 attitude;                           // lab to body
     };
     void forEachBody(const std::function<void(int)>& task);
+    /** Take body b's momenta from its particles if their velocities are not the ones this class wrote. */
+    void refreshMomenta(int b, const std::vector<OpenMM::Vec3>& positions, const std::vector<OpenMM::Vec3>& velocities);
+    /** The total force and the torque about the centre on a body. */
+    void forceAndTorque(const RigidBody& body, const BodyState& state, const std::vector<OpenMM::Vec3>& positions,
+                        const std::vector<OpenMM::Vec3>& forces, OpenMM::Vec3& force, OpenMM::Vec3& torque) const;
+    /** The free motion of body b for a time h, and its particles placed accordingly. */
+    void driftBody(int b, double h, RigidBodyIntegrator::RotationMethod method, std::vector<OpenMM::Vec3>& positions);
     /** Make sure every body has a shape, taking explicit bodies' shapes from these positions. */
     void ensureShapes(const std::vector<OpenMM::Vec3>& positions);
     void rotate(const RigidBody& body, BodyState& state, double dt, RigidBodyIntegrator::RotationMethod method) const;

@@ -1,4 +1,5 @@
 #include "ReferenceRigidKernels.h"
+#include "internal/Splitting.h"
 #include "openmm/Context.h"
 #include "openmm/reference/ReferencePlatform.h"
 #include <cstdlib>
@@ -51,12 +52,17 @@ void ReferenceIntegrateRigidBodyStepKernel::project(ContextImpl& context) {
 void ReferenceIntegrateRigidBodyStepKernel::execute(ContextImpl& context, const RigidBodyIntegrator& integrator) {
     vector<Vec3>& positions = extractPositions(context);
     vector<Vec3>& velocities = extractVelocities(context);
-    vector<Vec3>& forces = extractForces(context);
+    vector<Vec3>& forces = extractForces(context);  // refilled in place by each force evaluation
+    const SplittingScheme& scheme = splittingScheme(integrator.getSplitting());
     const double dt = integrator.getStepSize(), tolerance = integrator.getConstraintTolerance();
-    dynamics->firstHalf(positions, velocities, forces, dt, integrator.getRotationMethod(), tolerance);
-    context.computeVirtualSites();
-    context.calcForcesAndEnergy(true, false, integrator.getIntegrationForceGroups());
-    dynamics->secondHalf(positions, velocities, forces, dt, tolerance);
+    const RigidBodyIntegrator::RotationMethod method = integrator.getRotationMethod();
+    // The first kick uses the forces the context holds; every drift is followed by a force evaluation.
+    for (int stage = 0; stage < scheme.numDrifts; stage++) {
+        dynamics->kickAndDrift(positions, velocities, forces, scheme.kicks[stage]*dt, scheme.drifts[stage]*dt, method, tolerance);
+        context.computeVirtualSites();
+        context.calcForcesAndEnergy(true, false, integrator.getIntegrationForceGroups());
+    }
+    dynamics->closingKick(positions, velocities, forces, scheme.kicks[scheme.numDrifts]*dt, tolerance);
     ReferencePlatform::PlatformData& data = platformData(context);
     data.time += dt;
     data.stepCount++;
