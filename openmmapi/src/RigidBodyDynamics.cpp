@@ -212,7 +212,9 @@ void RigidBodyDynamics::rotate(const RigidBody& body, BodyState& state, double d
 void RigidBodyDynamics::refreshMomenta(int b, const vector<Vec3>& positions, const vector<Vec3>& velocities) {
     // Rebuilding the momenta from the particles at every step would not do: the few-ulp mismatch
     // between the moments and the body coordinates would then scale L by the same factor every
-    // step, a slow systematic drift. So they are rebuilt only when the velocities were changed.
+    // step, a slow systematic drift. So they are rebuilt only when the velocities were changed, and
+    // the changed velocities are then recorded as seen: the later stages of the step must keep the
+    // momenta their kicks made, not rebuild them again from velocities that are now out of date.
     const RigidBody& body = system.getBodies()[b];
     BodyState& state = states[b];
     const int n = body.particles.size();
@@ -231,6 +233,8 @@ void RigidBodyDynamics::refreshMomenta(int b, const vector<Vec3>& positions, con
     }
     state.velocity = toVector(velocity);
     state.angularMomentum = toVector(angularMomentum);
+    for (int i = 0; i < n; i++)
+        writtenVelocities[body.particles[i]] = velocities[body.particles[i]];
 }
 
 void RigidBodyDynamics::forceAndTorque(const RigidBody& body, const BodyState& state, const vector<Vec3>& positions,

@@ -102,7 +102,9 @@ private:
     RigidBodySystem& system;
     std::vector<BodyState> states;
     std::vector<double> inverseMasses;
-    std::vector<OpenMM::Vec3> previousPositions, writtenVelocities;
+    std::vector<OpenMM::Vec3> previousPositions;
+    /** The body particles' velocities as this class last wrote or read them, consistent with the states. */
+    std::vector<OpenMM::Vec3> writtenVelocities;
     std::unique_ptr<OpenMM::ReferenceConstraintAlgorithm> constraints;
     OpenMM::ThreadPool* threads;
 };
