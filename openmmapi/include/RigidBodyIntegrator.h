@@ -86,12 +86,15 @@ public:
         Omelyan2 = 1,
         /**
          * Yoshida's triple jump: Verlet steps of w1 dt, w0 dt and w1 dt with w1 = 1/(2 - 2^(1/3)) and
-         * w0 = 1 - 2 w1. Fourth order; three force evaluations per step.
+         * w0 = 1 - 2 w1 (the middle one backwards in time). Fourth order, with either rotation method
+         * and with constraints; three force evaluations per step.
          */
         Yoshida4 = 2,
         /**
          * The optimized fourth-order Forest-Ruth-like scheme of Omelyan, Mryglod and Folk (2002), in
-         * its velocity form: five kicks and four drifts. Fourth order; four force evaluations per step.
+         * its velocity form: five kicks and four drifts; four force evaluations per step. Fourth order
+         * when the drifts are exact: with NoSquish, or for free particles held by constraints (which
+         * drift by SHAKE), it is second order. Yoshida4 is fourth order in both cases.
          */
         Omelyan4 = 3
     };

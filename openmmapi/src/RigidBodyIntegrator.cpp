@@ -20,7 +20,8 @@ RigidBodyIntegrator::RigidBodyIntegrator(double stepSize) : explicitBodies(false
 }
 
 RigidBodyIntegrator::RigidBodyIntegrator(double stepSize, const vector<vector<int> >& bodies) : bodies(bodies),
-        explicitBodies(true), rotationMethod(Exact), splitting(Verlet), bound(false), forcesAreValid(false), needsProjection(true) {
+        explicitBodies(true), rotationMethod(Exact), splitting(Verlet), bound(false), forcesAreValid(false),
+        needsProjection(true) {
     setStepSize(stepSize);
     setConstraintTolerance(1e-5);
     for (size_t b = 0; b < bodies.size(); b++)

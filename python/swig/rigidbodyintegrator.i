@@ -305,7 +305,8 @@ splitting : int
     Verlet steps of w1 dt, w0 dt, w1 dt with w1 = 1/(2 - 2^(1/3)), w0 = 1 - 2 w1 (Yoshida, Phys.
     Lett. A 150, 262 (1990); fourth order, three). ``RigidBodyIntegrator.Omelyan4``: the velocity
     form of the optimized Forest-Ruth-like scheme of Omelyan, Mryglod and Folk, Comput. Phys.
-    Commun. 146, 188 (2002) (fourth order, four).
+    Commun. 146, 188 (2002) (four; fourth order with exact drifts, second order with ``NoSquish``
+    or for free particles held by constraints, where Yoshida4 stays fourth order).
 
 Raises
 ------
