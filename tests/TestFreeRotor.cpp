@@ -804,6 +804,44 @@ void testTinyOffAxisComponents() {
 }
 
 /** Bad input is rejected with std::invalid_argument naming the problem. */
+/**
+ * FreeRotor::advance (construct and evolve once, with the theta series at the start and at t summed
+ * together) gives what the constructor and evolve() give, for every kind and the delicate bodies, at
+ * times up to many periods and of both signs; and the independent integration agrees with it.
+ */
+void testAdvance() {
+    std::vector<Body> bodies = allBodies(8);
+    for (const Body& body : delicateBodies())
+        bodies.push_back(body);
+    for (const Body& body : bodies) {
+        double scale = omegaScale(body);
+        FreeRotor rotor = makeRotor(body);
+        for (double t : {0.0, clampTime(0.01/scale, body), clampTime(-0.7/scale, body), clampTime(25.0/scale, body)}) {
+            State expected = evolve(rotor, t);
+            State state = {body.omega, body.attitude};
+            FreeRotor::advance(body.moments, state.omega, state.attitude, t);
+            std::string where = describe(body, t);
+            // The fused sums add the same terms in the same order: agreement to a few ulps of the phase.
+            double tolerance = 1e-14*(1.0 + std::fabs(t)*scale);
+            assertSmall(maxDifference(expected.omega, state.omega)/scale, tolerance, "advance omega vs evolve", where, __LINE__);
+            assertSmall(maxDifference(expected.attitude, state.attitude), tolerance, "advance A vs evolve", where, __LINE__);
+        }
+    }
+    Body body = randomBodies(FreeRotor::Asymmetric, 1)[0];
+    double scale = omegaScale(body);
+    std::vector<double> times = {clampTime(0.9/scale, body)};
+    State reference = integrate(body, times)[0];
+    State state = {body.omega, body.attitude};
+    FreeRotor::advance(body.moments, state.omega, state.attitude, times[0]);
+    assertSmall(maxDifference(reference.omega, state.omega)/scale, 1e-9, "advance omega vs RK4", describe(body, times[0]), __LINE__);
+    assertSmall(maxDifference(reference.attitude, state.attitude), 1e-9, "advance A vs RK4", describe(body, times[0]), __LINE__);
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    Vector3 omega = {0.3, -1.0, 2.0};
+    Matrix3 attitude = randomRotation();
+    assertThrowsInvalidArgument([&]() { FreeRotor::advance({1, 2, 3}, omega, attitude, nan); }, "advance(NaN)", __LINE__);
+    assertThrowsInvalidArgument([&]() { FreeRotor::advance({-1, 2, 3}, omega, attitude, 1.0); }, "advance, negative moment", __LINE__);
+}
+
 void testInvalidInput() {
     const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
     const Matrix3 identity = {{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}};
@@ -864,6 +902,7 @@ int main() {
         testConservation();
         testSeparatrixLongTimes();
         testTinyOffAxisComponents();
+        testAdvance();
         testInvalidInput();
     }
     catch (const std::exception& e) {
