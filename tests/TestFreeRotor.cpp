@@ -742,14 +742,23 @@ void testNearlySymmetric() {
  * solutions to solutions. Checked for s, mu from 1e-8 to 1e8, to 1e-12.
  */
 void testScaling() {
+    // s = 2^-1030 makes omega subnormal and s = 1e307 puts it within a factor 4 of the largest double,
+    // the two ends of the internal scaling of omega by a power of two. A subnormal omega keeps fewer
+    // bits: it is compared with the rotor of the omega it rounds to (exact, since s is a power of two),
+    // and at a smaller rotation angle, since t / s must stay finite.
+    const double subnormal = std::ldexp(1.0, -1030);
     for (const Body& body : allBodies(3)) {
-        FreeRotor rotor = makeRotor(body);
-        double t = 2.7/omegaScale(body);
-        State reference = evolve(rotor, t);
-        for (double s : {1e-8, 1e8})
+        for (double s : {1e-8, 1e8, subnormal, 1e307})
             for (double mu : {1e-6, 1.0, 1e6}) {
-                Vector3 moments = {mu*body.moments[0], mu*body.moments[1], mu*body.moments[2]};
+                if (mu*s > 1e300)
+                    continue;  // the angular momentum itself would overflow
                 Vector3 omega = {s*body.omega[0], s*body.omega[1], s*body.omega[2]};
+                Body unscaled = body;
+                if (s == subnormal)
+                    unscaled.omega = {omega[0]/s, omega[1]/s, omega[2]/s};
+                double t = (s == subnormal ? 1e-3 : 2.7)/omegaScale(body);
+                State reference = evolve(makeRotor(unscaled), t);
+                Vector3 moments = {mu*body.moments[0], mu*body.moments[1], mu*body.moments[2]};
                 State state = evolve(makeRotor({moments, omega, body.attitude, body.name + " scaled"}), t/s);
                 std::string where = describe(body, t) + " scaled by s = " + str(s) + ", mu = " + str(mu);
                 Vector3 rescaled = {state.omega[0]/s, state.omega[1]/s, state.omega[2]/s};

@@ -36,6 +36,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -108,6 +110,8 @@ private:
     static constexpr int maxThetaTerms = 64;
 
     void validate(const Vector3& moments, const Vector3& omega, const Matrix3& attitude) const;
+    /** scale = 2^e with x = f 2^e, 1/2 <= f < 1 (as std::frexp splits it), and 1/scale, for normal x > 0. */
+    static void powerOfTwoAbove(double x, double& scale, double& inverseScale);
     void classify();
     /** The theta-series values at one argument u (see thetaSeries()). */
     struct ThetaValues {
@@ -124,9 +128,9 @@ private:
     void thetaSeries(const double* u, ThetaValues* values) const;
     /** evolve() once sn, cn, dn at u = wp t + eps and cos psi, sin psi are known. */
     void compose(double sn, double cn, double dn, double cosPsi, double sinPsi, Vector3& omega, Matrix3& attitude) const;
-    /** cos and sin of the precession angle psi(t) from theta_1 at t (vZS eq. (4.3)). */
+    /** cos and sin of the precession angle psi from theta_1 at the time t*frequencyScale (vZS eq. (4.3)). */
     void thetaPrecession(double t, const ThetaValues& value, double& cosPsi, double& sinPsi) const;
-    Matrix3 bodyToInvariantFrame(const Vector3& internalOmega) const;
+    Matrix3 bodyToInvariantFrame(double sn, double cn, double dn) const;
 
     Vector3 moments, omega0;
     Matrix3 attitude0;
@@ -140,6 +144,10 @@ private:
     std::array<int, 3> axisOf;
     std::array<double, 3> axisSign;
     double internalMoments[3];
+    // The frequencies below, and |L|, are kept in units of frequencyScale, the power of two near
+    // max |omega_k| (see initializeAsymmetric()), and evolve() scales the time instead: neither their
+    // products nor the time's underflow or overflow for any finite omega.
+    double frequencyScale;
     double angularMomentum;  // |L|
     double w1m, w2m, w3m, wp, m, m1, quarterPeriod, epsilon;
     Matrix3 b;               // B = T1'(omega(0))^T Q A(0)
@@ -191,7 +199,7 @@ inline void FreeRotor::advance(const Vector3& moments, Vector3& omega, Matrix3& 
     FreeRotor rotor(moments, omega, attitude, Automatic, checkInput, &t);
     if (rotor.kind == Asymmetric && !rotor.steady && rotor.representation == ThetaSeries) {
         double cosPsi, sinPsi;
-        rotor.thetaPrecession(t, rotor.fusedValues, cosPsi, sinPsi);
+        rotor.thetaPrecession(t*rotor.frequencyScale, rotor.fusedValues, cosPsi, sinPsi);
         rotor.compose(rotor.fusedValues.sn, rotor.fusedValues.cn, rotor.fusedValues.dn, cosPsi, sinPsi, omega, attitude);
     }
     else
@@ -214,6 +222,24 @@ inline void FreeRotor::validate(const Vector3& moments, const Vector3& omega, co
                 std::to_string(orthonormalityError(attitude)) + ")");
     if (determinant(attitude) < 0.0)
         throw std::invalid_argument("FreeRotor: the attitude matrix has determinant -1 (a reflection, not a rotation)");
+}
+
+inline void FreeRotor::powerOfTwoAbove(double x, double& scale, double& inverseScale) {
+    // From the exponent field E of x = 1.f 2^(E - 1023): scale has field E + 1 and 1/scale field 2045 - E,
+    // both normal numbers unless x is subnormal or within a factor 4 of the largest double.
+    std::uint64_t bits;
+    std::memcpy(&bits, &x, sizeof(bits));
+    const std::uint64_t field = bits >> 52;
+    if (field == 0 || field >= 2045) {
+        int exponent;
+        std::frexp(x, &exponent);
+        scale = std::ldexp(1.0, exponent);
+        inverseScale = std::ldexp(1.0, -exponent);
+        return;
+    }
+    const std::uint64_t scaleBits = (field + 1) << 52, inverseBits = (2045 - field) << 52;
+    std::memcpy(&scale, &scaleBits, sizeof(scale));
+    std::memcpy(&inverseScale, &inverseBits, sizeof(inverseScale));
 }
 
 inline void FreeRotor::classify() {
@@ -264,13 +290,17 @@ inline void FreeRotor::initializeAsymmetric(Representation requested, const doub
     // Everything below is computed for omega / 2^e with 2^e near max|omega_k| (so that no square
     // underflows or overflows, and the division is exact), and the quantities with units of
     // frequency are scaled back at the end.
-    int exponent;
-    std::frexp(std::max({std::fabs(omega0[0]), std::fabs(omega0[1]), std::fabs(omega0[2])}), &exponent);
-    const double scale = std::ldexp(1.0, exponent);
+    // A subnormal omega is first multiplied by 2^600, so that 1/2^e is a double too.
+    const double largest = std::max({std::fabs(omega0[0]), std::fabs(omega0[1]), std::fabs(omega0[2])});
+    const double prescale = (largest < std::numeric_limits<double>::min() ? 0x1p600 : 1.0);
+    double scale, inverseScale;
+    powerOfTwoAbove(largest*prescale, scale, inverseScale);
+    scale /= prescale;
+    const double scaledOmega[3] = {omega0[0]*prescale*inverseScale, omega0[1]*prescale*inverseScale, omega0[2]*prescale*inverseScale};
     // 2E Iy - L^2 = sum_k I_k w_k^2 (Iy - I_k), free of the cancellation of the difference.
     double twoEIyMinusL2 = 0.0;
     for (int k = 0; k < 3; k++)
-        twoEIyMinusL2 += moments[k]*(omega0[k]/scale)*(omega0[k]/scale)*(iy - moments[k]);
+        twoEIyMinusL2 += moments[k]*scaledOmega[k]*scaledOmega[k]*(iy - moments[k]);
     bool flip = (twoEIyMinusL2 > 0.0 && ix < iz) || (twoEIyMinusL2 < 0.0 && ix > iz);
     if (flip) {
         axisOf = {cyclic[2], cyclic[1], cyclic[0]};
@@ -283,7 +313,7 @@ inline void FreeRotor::initializeAsymmetric(Representation requested, const doub
     double w0[3];
     for (int j = 0; j < 3; j++) {
         internalMoments[j] = moments[axisOf[j]];
-        w0[j] = axisSign[j]*omega0[axisOf[j]]/scale;
+        w0[j] = axisSign[j]*scaledOmega[axisOf[j]];
     }
     const double i1 = internalMoments[0], i2 = internalMoments[1], i3 = internalMoments[2];
     // L^2 - 2E I_j = sum_k I_k w_k^2 (I_k - I_j) (notes: "Where the formulas are delicate").
@@ -348,13 +378,8 @@ inline void FreeRotor::initializeAsymmetric(Representation requested, const doub
     for (int j = 0; j < 3; j++)
         for (int c = 0; c < 3; c++)
             qa[j][c] = axisSign[j]*attitude0[axisOf[j]][c];
-    b = multiplyTransposed(bodyToInvariantFrame({w1m*cn0, w2m*sn0, w3m*dn0}), qa);
-    w1m *= scale;
-    w2m *= scale;
-    w3m *= scale;
-    wp *= scale;
-    angularMomentum *= scale;
-    phase2 *= scale;
+    b = multiplyTransposed(bodyToInvariantFrame(sn0, cn0, dn0), qa);
+    frequencyScale = scale;
 }
 
 inline void FreeRotor::initializeThetaSeries(double& sn0, double& cn0, double& dn0, const double* fusedTime) {
@@ -443,8 +468,7 @@ inline void FreeRotor::initializeThetaSeries(double& sn0, double& cn0, double& d
     cnScale = theta4/theta2;
     dnScale = theta4/theta3;
     phase2 = angularMomentum/i1 + thetaScale*wp*derivative/value;
-    // At u = eps, and for advance() at u = wp t + eps: its time, scaled like wp, gives the same product
-    // as evolve() computes.
+    // At u = eps, and for advance() at u = wp t + eps with t scaled as evolve() scales it.
     ThetaValues values[2];
     if (fusedTime != nullptr) {
         const double arguments[2] = {epsilon, wp*(*fusedTime) + epsilon};
@@ -547,13 +571,14 @@ inline double FreeRotor::precessionAngleExcess(double u, double sn, double cn, d
 }
 
 /** T1'(omega) of vZS eq. (3.13): its columns are e1, e2 and L/|L| in the internal body frame. */
-inline Matrix3 FreeRotor::bodyToInvariantFrame(const Vector3& w) const {
-    double l1 = internalMoments[0]*w[0], l2 = internalMoments[1]*w[1], l3 = internalMoments[2]*w[2];
+inline Matrix3 FreeRotor::bodyToInvariantFrame(double sn, double cn, double dn) const {
+    // L = (I1 w1m cn, I2 w2m sn, I3 w3m dn) (vZS eqs. (3.33)-(3.35)), in units of frequencyScale.
+    double l1 = internalMoments[0]*w1m*cn, l2 = internalMoments[1]*w2m*sn, l3 = internalMoments[2]*w3m*dn;
     double perp = std::sqrt(l1*l1 + l2*l2);
-    double l = angularMomentum;
-    return {{{l1*l3/(l*perp), -l2/perp, l1/l},
-             {l2*l3/(l*perp), l1/perp, l2/l},
-             {-perp/l, 0.0, l3/l}}};
+    double inverseL = 1.0/angularMomentum, inversePerp = 1.0/perp, l3Ratio = l3*inverseL*inversePerp;
+    return {{{l1*l3Ratio, -l2*inversePerp, l1*inverseL},
+             {l2*l3Ratio, l1*inversePerp, l2*inverseL},
+             {-perp*inverseL, 0.0, l3*inverseL}}};
 }
 
 inline void FreeRotor::evolve(double t, Vector3& omega, Matrix3& attitude) const {
@@ -576,19 +601,20 @@ inline void FreeRotor::evolve(double t, Vector3& omega, Matrix3& attitude) const
         return;
     }
     // Asymmetric top: vZS eqs. (3.33)-(3.35), then A = Q^T T1'(omega(t)) T2'(psi) B.
-    double u = wp*t + epsilon;
+    const double scaledTime = t*frequencyScale;  // exact: frequencyScale is a power of two
+    double u = wp*scaledTime + epsilon;
     double cosPsi, sinPsi;
     if (representation == ThetaSeries) {
         ThetaValues value;
         thetaSeries<1>(&u, &value);
-        thetaPrecession(t, value, cosPsi, sinPsi);
+        thetaPrecession(scaledTime, value, cosPsi, sinPsi);
         compose(value.sn, value.cn, value.dn, cosPsi, sinPsi, omega, attitude);
     }
     else {
         double sn, cn, dn;
         Special::jacobiElliptic(u, m, m1, sn, cn, dn);
         // psi = (L/I3) t + P (Pi(u) - Pi(eps)) with Pi(u) = u + excess(u) and P wp = L (I3 - I1)/(I1 I3).
-        double psi = angularMomentum/internalMoments[0]*t + integralPrefactor*(precessionAngleExcess(u, sn, cn, dn) - integralAtStart);
+        double psi = angularMomentum/internalMoments[0]*scaledTime + integralPrefactor*(precessionAngleExcess(u, sn, cn, dn) - integralAtStart);
         compose(sn, cn, dn, std::cos(psi), std::sin(psi), omega, attitude);
     }
 }
@@ -604,8 +630,8 @@ inline void FreeRotor::thetaPrecession(double t, const ThetaValues& value, doubl
 
 inline void FreeRotor::compose(double sn, double cn, double dn, double cosPsi, double sinPsi, Vector3& omega,
                                Matrix3& attitude) const {
-    Vector3 w = {w1m*cn, w2m*sn, w3m*dn};
-    Matrix3 t1 = bodyToInvariantFrame(w);
+    Vector3 w = {w1m*cn*frequencyScale, w2m*sn*frequencyScale, w3m*dn*frequencyScale};
+    Matrix3 t1 = bodyToInvariantFrame(sn, cn, dn);
     // T1' T2' with T2' = [[cos, sin, 0], [-sin, cos, 0], [0, 0, 1]] (vZS eq. (3.14)).
     Matrix3 rotation;
     for (int i = 0; i < 3; i++) {
