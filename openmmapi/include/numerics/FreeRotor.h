@@ -327,10 +327,10 @@ inline void FreeRotor::initializeAsymmetric(Representation requested, const doub
     angularMomentum = std::sqrt(l2);
     // vZS eqs. (3.36)-(3.41). sgn(0) is taken as +1; any fixed choice satisfies Euler's equations.
     const double sign1 = (w0[0] < 0.0 ? -1.0 : 1.0), sign3 = (w0[2] < 0.0 ? -1.0 : 1.0);
-    w1m = sign1*std::sqrt(std::fmax(0.0, l2MinusTwoEI3/(i1*(i1 - i3))));
-    w2m = -sign1*std::sqrt(std::fmax(0.0, l2MinusTwoEI3/(i2*(i2 - i3))));
-    w3m = sign3*std::sqrt(std::fmax(0.0, l2MinusTwoEI1/(i3*(i3 - i1))));
-    wp = (i2 > i3 ? 1.0 : -1.0)*sign3*std::sqrt(std::fmax(0.0, l2MinusTwoEI1*(i3 - i2)/(i1*i2*i3)));
+    w1m = sign1*std::sqrt(std::max(0.0, l2MinusTwoEI3/(i1*(i1 - i3))));
+    w2m = -sign1*std::sqrt(std::max(0.0, l2MinusTwoEI3/(i2*(i2 - i3))));
+    w3m = sign3*std::sqrt(std::max(0.0, l2MinusTwoEI1/(i3*(i3 - i1))));
+    wp = (i2 > i3 ? 1.0 : -1.0)*sign3*std::sqrt(std::max(0.0, l2MinusTwoEI1*(i3 - i2)/(i1*i2*i3)));
     double numerator = l2MinusTwoEI3*(i1 - i2), denominator = l2MinusTwoEI1*(i3 - i2);
     m = std::clamp(numerator/denominator, 0.0, 1.0);
     // 1 - m = (L^2 - 2E I2)(I3 - I1) / ((L^2 - 2E I1)(I3 - I2)), again without cancellation.
