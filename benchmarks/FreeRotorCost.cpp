@@ -162,6 +162,20 @@ int main() {
         };
         rows.push_back({c.kind, "construct+evolve", representation, time(constructAndEvolve)});
         total += checksum(outputs);
+        if (c.representation == FreeRotor::Automatic) {
+            // What RigidBodyIntegrator calls once per body and step (it skips the input checks; this does not).
+            auto advance = [&]() {
+                for (int call = 0; call < CALLS; call++) {
+                    const Input& x = in[call%INPUTS];
+                    Output& o = out[call%INPUTS];
+                    o.omega = x.omega;
+                    o.attitude = x.attitude;
+                    FreeRotor::advance(x.moments, o.omega, o.attitude, x.t);
+                }
+            };
+            rows.push_back({c.kind, "advance", representation, time(advance)});
+            total += checksum(outputs);
+        }
         // Evolve only: one rotor, many different times spread over several rotation periods.
         std::vector<double> times(INPUTS);
         for (double& t : times)

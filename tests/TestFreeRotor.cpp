@@ -742,14 +742,23 @@ void testNearlySymmetric() {
  * solutions to solutions. Checked for s, mu from 1e-8 to 1e8, to 1e-12.
  */
 void testScaling() {
+    // s = 2^-1030 makes omega subnormal and s = 1e307 puts it within a factor 4 of the largest double,
+    // the two ends of the internal scaling of omega by a power of two. A subnormal omega keeps fewer
+    // bits: it is compared with the rotor of the omega it rounds to (exact, since s is a power of two),
+    // and at a smaller rotation angle, since t / s must stay finite.
+    const double subnormal = std::ldexp(1.0, -1030);
     for (const Body& body : allBodies(3)) {
-        FreeRotor rotor = makeRotor(body);
-        double t = 2.7/omegaScale(body);
-        State reference = evolve(rotor, t);
-        for (double s : {1e-8, 1e8})
+        for (double s : {1e-8, 1e8, subnormal, 1e307})
             for (double mu : {1e-6, 1.0, 1e6}) {
-                Vector3 moments = {mu*body.moments[0], mu*body.moments[1], mu*body.moments[2]};
+                if (mu*s > 1e300)
+                    continue;  // the angular momentum itself would overflow
                 Vector3 omega = {s*body.omega[0], s*body.omega[1], s*body.omega[2]};
+                Body unscaled = body;
+                if (s == subnormal)
+                    unscaled.omega = {omega[0]/s, omega[1]/s, omega[2]/s};
+                double t = (s == subnormal ? 1e-3 : 2.7)/omegaScale(body);
+                State reference = evolve(makeRotor(unscaled), t);
+                Vector3 moments = {mu*body.moments[0], mu*body.moments[1], mu*body.moments[2]};
                 State state = evolve(makeRotor({moments, omega, body.attitude, body.name + " scaled"}), t/s);
                 std::string where = describe(body, t) + " scaled by s = " + str(s) + ", mu = " + str(mu);
                 Vector3 rescaled = {state.omega[0]/s, state.omega[1]/s, state.omega[2]/s};
@@ -804,6 +813,44 @@ void testTinyOffAxisComponents() {
 }
 
 /** Bad input is rejected with std::invalid_argument naming the problem. */
+/**
+ * FreeRotor::advance (construct and evolve once, with the theta series at the start and at t summed
+ * together) gives what the constructor and evolve() give, for every kind and the delicate bodies, at
+ * times up to many periods and of both signs; and the independent integration agrees with it.
+ */
+void testAdvance() {
+    std::vector<Body> bodies = allBodies(8);
+    for (const Body& body : delicateBodies())
+        bodies.push_back(body);
+    for (const Body& body : bodies) {
+        double scale = omegaScale(body);
+        FreeRotor rotor = makeRotor(body);
+        for (double t : {0.0, clampTime(0.01/scale, body), clampTime(-0.7/scale, body), clampTime(25.0/scale, body)}) {
+            State expected = evolve(rotor, t);
+            State state = {body.omega, body.attitude};
+            FreeRotor::advance(body.moments, state.omega, state.attitude, t);
+            std::string where = describe(body, t);
+            // The fused sums add the same terms in the same order: agreement to a few ulps of the phase.
+            double tolerance = 1e-14*(1.0 + std::fabs(t)*scale);
+            assertSmall(maxDifference(expected.omega, state.omega)/scale, tolerance, "advance omega vs evolve", where, __LINE__);
+            assertSmall(maxDifference(expected.attitude, state.attitude), tolerance, "advance A vs evolve", where, __LINE__);
+        }
+    }
+    Body body = randomBodies(FreeRotor::Asymmetric, 1)[0];
+    double scale = omegaScale(body);
+    std::vector<double> times = {clampTime(0.9/scale, body)};
+    State reference = integrate(body, times)[0];
+    State state = {body.omega, body.attitude};
+    FreeRotor::advance(body.moments, state.omega, state.attitude, times[0]);
+    assertSmall(maxDifference(reference.omega, state.omega)/scale, 1e-9, "advance omega vs RK4", describe(body, times[0]), __LINE__);
+    assertSmall(maxDifference(reference.attitude, state.attitude), 1e-9, "advance A vs RK4", describe(body, times[0]), __LINE__);
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    Vector3 omega = {0.3, -1.0, 2.0};
+    Matrix3 attitude = randomRotation();
+    assertThrowsInvalidArgument([&]() { FreeRotor::advance({1, 2, 3}, omega, attitude, nan); }, "advance(NaN)", __LINE__);
+    assertThrowsInvalidArgument([&]() { FreeRotor::advance({-1, 2, 3}, omega, attitude, 1.0); }, "advance, negative moment", __LINE__);
+}
+
 void testInvalidInput() {
     const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
     const Matrix3 identity = {{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}};
@@ -864,6 +911,7 @@ int main() {
         testConservation();
         testSeparatrixLongTimes();
         testTinyOffAxisComponents();
+        testAdvance();
         testInvalidInput();
     }
     catch (const std::exception& e) {

@@ -202,9 +202,8 @@ void RigidBodyDynamics::rotate(const RigidBody& body, BodyState& state, double d
         noSquishRotate(body.moments, dt, state.attitude, bodyMomentum);
     else {
         // The attitude is kept orthonormal here and the momenta were checked finite in kickAndDrift().
-        FreeRotor rotor(body.moments, bodyAngularVelocity(body, bodyMomentum), state.attitude, FreeRotor::Automatic, false);
-        Vector3 omega;
-        rotor.evolve(dt, omega, state.attitude);
+        Vector3 omega = bodyAngularVelocity(body, bodyMomentum);
+        FreeRotor::advance(body.moments, omega, state.attitude, dt, false);
     }
     reorthonormalize(state.attitude);
 }

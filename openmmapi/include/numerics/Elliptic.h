@@ -42,6 +42,53 @@ inline void requireParameter(const char* function, double m, double m1) {
                 " and its complement m1 = " + std::to_string(m1) + " must both lie in [0, 1]");
 }
 
+/**
+ * RF(x[k], y[k], z[k]) for N argument triples at once (see carlsonRF below). The duplications of
+ * the N integrals run in lockstep until every one has reached its stopping point, so that their
+ * square roots overlap in the processor; a duplication beyond an integral's own stopping point only
+ * makes its Taylor remainder smaller. The arguments must be finite and non-negative, with at most one
+ * zero per triple (carlsonRF checks this; FreeRotor guarantees it). x, y and z are overwritten.
+ */
+template <int N>
+inline void carlsonRFLockstep(double (&x)[N], double (&y)[N], double (&z)[N], double (&result)[N]) {
+    double mean[N], mean0[N], x0[N], y0[N], q[N];
+    for (int k = 0; k < N; k++) {
+        mean[k] = mean0[k] = (x[k] + y[k] + z[k])/3.0;
+        x0[k] = x[k];
+        y0[k] = y[k];
+        q[k] = rfStopFactor*std::max({std::fabs(mean[k] - x[k]), std::fabs(mean[k] - y[k]), std::fabs(mean[k] - z[k])});
+    }
+    double scale = 1.0;  // 4^-n
+    auto converged = [&]() {
+        for (int k = 0; k < N; k++)
+            if (q[k]*scale >= std::fabs(mean[k]))
+                return false;
+        return true;
+    };
+    while (!converged()) {
+        // DLMF 19.26.18: RF(x, y, z) = RF((x + l)/4, (y + l)/4, (z + l)/4), l = sqrt(xy) + sqrt(yz) + sqrt(zx).
+        for (int k = 0; k < N; k++) {
+            double sx = std::sqrt(x[k]), sy = std::sqrt(y[k]), sz = std::sqrt(z[k]);
+            double lambda = sx*sy + sy*sz + sz*sx;
+            x[k] = 0.25*(x[k] + lambda);
+            y[k] = 0.25*(y[k] + lambda);
+            z[k] = 0.25*(z[k] + lambda);
+            mean[k] = 0.25*(mean[k] + lambda);
+        }
+        scale *= 0.25;
+    }
+    for (int k = 0; k < N; k++) {
+        // DLMF 19.36.1 in the elementary symmetric functions e2, e3 of the scaled deviations.
+        double dx = (mean0[k] - x0[k])*scale/mean[k];
+        double dy = (mean0[k] - y0[k])*scale/mean[k];
+        double dz = -dx - dy;
+        double e2 = dx*dy - dz*dz;
+        double e3 = dx*dy*dz;
+        result[k] = (1.0 - e2/10.0 + e3/14.0 + e2*e2/24.0 - 3.0*e2*e3/44.0 - 5.0*e2*e2*e2/208.0 + 3.0*e3*e3/104.0 +
+                     e2*e2*e3/16.0)/std::sqrt(mean[k]);
+    }
+}
+
 } // namespace detail
 
 /**
@@ -56,28 +103,9 @@ inline double carlsonRF(double x, double y, double z) {
         throw std::invalid_argument("carlsonRF: at most one argument may be zero (the integral diverges)");
     if (std::isinf(x) || std::isinf(y) || std::isinf(z))
         return 0.0;
-    double mean = (x + y + z)/3.0;
-    const double mean0 = mean;
-    double q = detail::rfStopFactor*
-               std::max({std::fabs(mean - x), std::fabs(mean - y), std::fabs(mean - z)});
-    double scale = 1.0;  // 4^-n
-    const double x0 = x, y0 = y;
-    while (q*scale >= std::fabs(mean)) {
-        double sx = std::sqrt(x), sy = std::sqrt(y), sz = std::sqrt(z);
-        double lambda = sx*sy + sy*sz + sz*sx;
-        x = 0.25*(x + lambda);
-        y = 0.25*(y + lambda);
-        z = 0.25*(z + lambda);
-        mean = 0.25*(mean + lambda);
-        scale *= 0.25;
-    }
-    double dx = (mean0 - x0)*scale/mean;
-    double dy = (mean0 - y0)*scale/mean;
-    double dz = -dx - dy;
-    double e2 = dx*dy - dz*dz;
-    double e3 = dx*dy*dz;
-    return (1.0 - e2/10.0 + e3/14.0 + e2*e2/24.0 - 3.0*e2*e3/44.0 - 5.0*e2*e2*e2/208.0 + 3.0*e3*e3/104.0 +
-            e2*e2*e3/16.0)/std::sqrt(mean);
+    double result[1], xs[1] = {x}, ys[1] = {y}, zs[1] = {z};
+    detail::carlsonRFLockstep<1>(xs, ys, zs, result);
+    return result[0];
 }
 
 /**
