@@ -32,8 +32,10 @@ def buildWater(molecules, model):
 
 
 def degreesOfFreedom(system):
+    """3 per massive particle, less one per constraint and 3 more with a CMMotionRemover (as OpenMM counts them)."""
     massive = sum(1 for i in range(system.getNumParticles()) if system.getParticleMass(i) > 0*unit.dalton)
-    return 3*massive - system.getNumConstraints()
+    remover = any(isinstance(force, openmm.CMMotionRemover) for force in system.getForces())
+    return 3*massive - system.getNumConstraints() - (3 if remover else 0)
 
 
 def runNVE(system, state, integrator, platform, steps, sampleEvery):
