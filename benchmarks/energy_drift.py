@@ -93,6 +93,7 @@ import openmm
 from openmm import app, unit
 
 import openmmrigid
+from reporting import openLog, say, stamp
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402 (after choosing the backend)
@@ -108,19 +109,6 @@ EQUILIBRATION_STEP = 2.0  # fs
 EQUILIBRATION_FRICTION = 5.0  # 1/ps: strong, so that short (quick) equilibrations reach 300 K after minimization
 DRIFT_BLOCKS = 10
 KJ = unit.kilojoule_per_mole
-LOG = None
-
-
-def say(text=""):
-    """Print a line and copy it to the log file."""
-    print(text, flush=True)
-    if LOG is not None:
-        LOG.write(text + "\n")
-        LOG.flush()
-
-
-def stamp(text):
-    say(f"[{datetime.datetime.now():%H:%M:%S}] {text}")
 
 
 class Progress:
@@ -780,10 +768,9 @@ def printHeader(args, platform):
 
 
 def main():
-    global LOG
     args = parseArguments()
     args.output.parent.mkdir(parents=True, exist_ok=True)
-    LOG = open(f"{args.output}.log", "w")
+    openLog(f"{args.output}.log")
     platform = openmm.Platform.getPlatformByName(args.platform)
     properties = contextProperties(platform, args.threads)
     printHeader(args, platform)

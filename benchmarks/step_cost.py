@@ -48,6 +48,7 @@ import openmm
 from openmm import app, unit
 
 import openmmrigid
+from reporting import openLog, say, stamp
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402 (after choosing the backend)
@@ -60,20 +61,6 @@ CUTOFF = 0.9*unit.nanometer
 TEMPERATURE = 300*unit.kelvin
 MODEL_NAMES = {"tip3p": "TIP3P", "tip4pew": "TIP4P-Ew"}
 STOCK, EXACT, NOSQUISH = "VerletIntegrator+SETTLE", "RigidBodyIntegrator/Exact", "RigidBodyIntegrator/NoSquish"
-LOG = None
-
-
-def say(text=""):
-    """Print a line and copy it to the log file, flushing both (progress shows while it runs)."""
-    print(text, flush=True)
-    if LOG is not None:
-        LOG.write(text + "\n")
-        LOG.flush()
-
-
-def progress(text):
-    say(f"[{datetime.datetime.now():%H:%M:%S}] {text}")
-
 
 # ---------------------------------------------------------------------------------------------------
 # Machine, options
@@ -274,7 +261,7 @@ def measureBox(model, molecules, system, state, cpu, threads, args):
                      "median_ms_per_step": f"{median:.4f}", "ratio_to_stock": f"{statistics.median(samples)/stockMedian:.4f}",
                      "repetitions": args.repetitions, "steps": steps,
                      "min_ms_per_step": f"{low:.4f}", "max_ms_per_step": f"{high:.4f}"})
-    progress(f"  {MODEL_NAMES[model]} {molecules} threads={actualThreads}: {steps} steps/block; "
+    stamp(f"  {MODEL_NAMES[model]} {molecules} threads={actualThreads}: {steps} steps/block; "
              + "; ".join(f"{row['integrator'].split('/')[-1]} {float(row['median_ms_per_step']):.3f} ms "
                          f"[{float(row['min_ms_per_step']):.3f}-{float(row['max_ms_per_step']):.3f}]" for row in rows))
     del contexts
@@ -285,13 +272,13 @@ def runBoxes(args, cpu):
     rows = []
     for model in args.models:
         for molecules in args.sizes:
-            progress(f"{MODEL_NAMES[model]} {molecules}: building, minimizing ({args.minimizeIterations} iterations), "
+            stamp(f"{MODEL_NAMES[model]} {molecules}: building, minimizing ({args.minimizeIterations} iterations), "
                      f"{args.equilibrationSteps} Langevin steps")
             started = time.perf_counter()
             modeller, system = buildBox(model, molecules)
             waters = modeller.topology.getNumResidues()
             state = equilibratedState(modeller, system, cpu, args.equilibrationSteps, args.minimizeIterations)
-            progress(f"  {waters} waters, {system.getNumParticles()} particles; ready in {time.perf_counter() - started:.0f} s")
+            stamp(f"  {waters} waters, {system.getNumParticles()} particles; ready in {time.perf_counter() - started:.0f} s")
             for threads in args.threads:
                 rows.extend(measureBox(model, waters, system, state, cpu, threads, args))
     return rows
@@ -417,7 +404,7 @@ def measureKind(kind, cpu, threads, args):
                      "exact_to_nosquish": "" if method == "stock" else f"{ratio:.4f}", "repetitions": args.repetitions, "steps": steps,
                      "min_ns_per_body_step": f"{low:.2f}", "max_ns_per_body_step": f"{high:.2f}", "forces": "none",
                      "kinds_found": kinds})
-    progress(f"  {kind} x{count} threads={actualThreads}: {steps} steps/block; "
+    stamp(f"  {kind} x{count} threads={actualThreads}: {steps} steps/block; "
              + "; ".join(f"{row['method']} {float(row['median_ns_per_body_step']):.1f} ns "
                          f"[{float(row['min_ns_per_body_step']):.1f}-{float(row['max_ns_per_body_step']):.1f}]" for row in rows))
     del contexts
@@ -425,7 +412,7 @@ def measureKind(kind, cpu, threads, args):
 
 
 def runBodies(args, cpu):
-    progress(f"Part 2: {args.bodies} bodies per kind, no forces")
+    stamp(f"Part 2: {args.bodies} bodies per kind, no forces")
     rows = []
     for kind in BODY_KINDS:
         for threads in args.threads:
@@ -514,10 +501,9 @@ def plot(path, boxRows, bodyRows, title):
 
 
 def main():
-    global LOG
     args = parseArguments()
     RESULTS.mkdir(parents=True, exist_ok=True)
-    LOG = open(RESULTS / "step_cost.log", "w")
+    openLog(RESULTS / "step_cost.log")
     cpu = openmm.Platform.getPlatformByName("CPU")
     default = cpu.getPropertyDefaultValue("Threads")
     args.threads = list(dict.fromkeys(default if t == "default" else str(int(t)) for t in args.threads))

@@ -65,6 +65,7 @@ sys.path.insert(0, str(ROOT / "tests" / "python"))
 
 import openmmrigid  # noqa: E402
 import stress_systems as stress  # noqa: E402
+from reporting import closeLog, openLog, say  # noqa: E402
 import systems  # noqa: E402
 
 ENERGY_BUDGET = 0.01          # of the initial kinetic energy
@@ -76,14 +77,6 @@ IMPULSE_STEPS = 50
 FREE_ENERGY_TOLERANCE = 1e-12  # relative: the exact free rotor's invariants
 SPIN_ANGLE_TOLERANCE = 1e-12  # rad per rad turned
 STOCK = "Verlet+SETTLE"
-LOG = None
-
-
-def say(text=""):
-    print(text, flush=True)
-    if LOG is not None:
-        LOG.write(text + "\n")
-        LOG.flush()
 
 
 class Row:
@@ -312,7 +305,6 @@ def spin_in_bath(args):
 # ---------------------------------------------------------------------------------------------------
 
 def main():
-    global LOG
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="small systems, short runs (a couple of minutes)")
     parser.add_argument("--platform", default="CPU", choices=["Reference", "CPU"])
@@ -321,7 +313,7 @@ def main():
     args = parser.parse_args()
     results = ROOT / "benchmarks" / "results"
     results.mkdir(parents=True, exist_ok=True)
-    LOG = open(results / "stress.log", "w")
+    openLog(results / "stress.log")
     say(f"command:  {' '.join([sys.executable] + sys.argv)}")
     say(f"date:     {datetime.datetime.now().astimezone():%Y-%m-%d %H:%M:%S %Z}; {pyplatform.machine()}, "
         f"{os.cpu_count()} cores; OpenMM {openmm.version.full_version}, openmmrigid {openmmrigid.__version__}")
@@ -368,7 +360,7 @@ def main():
         say(f"largest stable step, {key}: " + ", ".join(f"{name} {'none' if fs is None else f'{fs} fs'}"
                                                      for name, fs in steps.items()))
     say(f"{failed} failing run(s)" if failed else "all criteria met")
-    LOG.close()
+    closeLog()
     return 1 if failed else 0
 
 

@@ -38,8 +38,8 @@ from openmm import unit
 import openmmrigid
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from explicit_bodies import (RigidMolecule, bodyKinds, boxEdge, buildBox, compress, energyConservation,  # noqa: E402
-                             equilibrate, runNVE, shapeDeviations, temperatures)
+from explicit_bodies import (RigidMolecule, bodyKinds, boxEdge, buildBox, compress,  # noqa: E402
+                             equilibrateRunAndReport)
 
 KILOJOULES_PER_KILOCALORIE = 4.184
 RING, CARBON_HYDROGEN = 0.140, 0.108  # nm: C-C (the ring's radius) and C-H
@@ -87,24 +87,8 @@ def main():
           f"(I3/(I1 + I2) = {moments[2]/(moments[0] + moments[1]):.12f}); {dof} degrees of freedom")
 
     stages = compress(context, integrator, bodies, edge, args.temperature, picosecondsPerStage=0.1, seed=args.seed)
-    equilibrate(context, integrator, args.temperature, args.equilibrate, seed=args.seed)
-    steps = int(round(args.time/(args.step*1e-3)))
-    run = runNVE(context, integrator, steps, max(1, steps//500))
-    drift, fluctuation = energyConservation(run, dof)
-    (translational, translationalError), (rotational, rotationalError), (excess, excessError) = \
-        temperatures(run, args.molecules, 3)
-    change, extents = shapeDeviations(context, bodies, positions)
-
-    print(f"\nNVE, {args.method} rotation, {args.time:g} ps at {args.step:g} fs ({steps} steps, "
-          f"{run.secondsPerStep*1e3:.2f} ms/step) after compression from {PACKING_DENSITY:g} g/cm^3 "
-          f"({stages} stages of 0.1 ps) and {args.equilibrate:g} ps of equilibration:")
-    print(f"  energy drift {drift:+.4f} kJ/mol/ns/dof, fluctuation {fluctuation:.3f} kJ/mol "
-          f"(total energy {run.energies.mean():.1f} kJ/mol)")
-    print(f"  temperature: translational {translational:.1f} +- {translationalError:.1f} K, "
-          f"rotational {rotational:.1f} +- {rotationalError:.1f} K (3 per molecule); "
-          f"rotational - translational {excess:+.1f} +- {excessError:.1f} K")
-    print(f"  rigidity: largest change of an intramolecular distance {change:.1e} nm; largest distance from the "
-          f"best-fit plane through a molecule (RMS over its atoms) {extents[:, 2].max():.1e} nm")
+    equilibrateRunAndReport(context, integrator, args, dof, bodies, positions, 3,
+                            history=f"compression from {PACKING_DENSITY:g} g/cm^3 ({stages} stages of 0.1 ps) and ")
     print(f"total {time.perf_counter() - started:.0f} s")
 
 

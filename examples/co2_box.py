@@ -35,8 +35,7 @@ from openmm import unit
 import openmmrigid
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from explicit_bodies import (BOLTZMANN, RigidMolecule, bodyKinds, buildBox, energyConservation,  # noqa: E402
-                             equilibrate, runNVE, shapeDeviations, temperatures)
+from explicit_bodies import (BOLTZMANN, RigidMolecule, bodyKinds, buildBox, equilibrateRunAndReport)  # noqa: E402
 
 CARBON_OXYGEN = 0.116  # nm
 TRAPPE_CO2 = RigidMolecule(
@@ -74,23 +73,7 @@ def main():
           f"{np.round(moments, 5).tolist()} amu nm^2; {dof} degrees of freedom "
           f"(3 + 2 per body)")
 
-    equilibrate(context, integrator, args.temperature, args.equilibrate, seed=args.seed)
-    steps = int(round(args.time/(args.step*1e-3)))
-    run = runNVE(context, integrator, steps, max(1, steps//500))
-    drift, fluctuation = energyConservation(run, dof)
-    (translational, translationalError), (rotational, rotationalError), (excess, excessError) = \
-        temperatures(run, args.molecules, 2)
-    change, extents = shapeDeviations(context, bodies, positions)
-
-    print(f"\nNVE, {args.method} rotation, {args.time:g} ps at {args.step:g} fs ({steps} steps, "
-          f"{run.secondsPerStep*1e3:.2f} ms/step) after {args.equilibrate:g} ps of equilibration:")
-    print(f"  energy drift {drift:+.4f} kJ/mol/ns/dof, fluctuation {fluctuation:.3f} kJ/mol "
-          f"(total energy {run.energies.mean():.1f} kJ/mol)")
-    print(f"  temperature: translational {translational:.1f} +- {translationalError:.1f} K, "
-          f"rotational {rotational:.1f} +- {rotationalError:.1f} K (2 per molecule); "
-          f"rotational - translational {excess:+.1f} +- {excessError:.1f} K")
-    print(f"  rigidity: largest change of an intramolecular distance {change:.1e} nm; largest distance from the "
-          f"best-fit line through a molecule (RMS over its atoms) {extents[:, 1].max():.1e} nm")
+    equilibrateRunAndReport(context, integrator, args, dof, bodies, positions, 2)
     print(f"total {time.perf_counter() - started:.0f} s")
 
 

@@ -255,3 +255,28 @@ def bodyKinds(integrator):
         kind = integrator.getBodyKind(index)
         kinds[kind] = kinds.get(kind, 0) + 1
     return kinds
+
+
+def equilibrateRunAndReport(context, integrator, args, dof, bodies, reference, rotationalDofPerBody, history=""):
+    """Equilibrate, run NVE for args.time ps at args.step fs and print what the example shows: energy
+    drift and fluctuation, translational and rotational temperatures (rotationalDofPerBody each) and how
+    rigid the molecules stayed (intramolecular distances against `reference` positions, and the extent
+    of each molecule off its best-fit line (linear) or plane (planar)). `history` says what came before
+    the equilibration, for the heading."""
+    equilibrate(context, integrator, args.temperature, args.equilibrate, seed=args.seed)
+    steps = int(round(args.time/(args.step*1e-3)))
+    run = runNVE(context, integrator, steps, max(1, steps//500))
+    drift, fluctuation = energyConservation(run, dof)
+    (translational, translationalError), (rotational, rotationalError), (excess, excessError) = \
+        temperatures(run, args.molecules, rotationalDofPerBody)
+    change, extents = shapeDeviations(context, bodies, reference)
+    shape, axis = ("line", 1) if rotationalDofPerBody == 2 else ("plane", 2)
+    print(f"\nNVE, {args.method} rotation, {args.time:g} ps at {args.step:g} fs ({steps} steps, "
+          f"{run.secondsPerStep*1e3:.2f} ms/step) after {history}{args.equilibrate:g} ps of equilibration:")
+    print(f"  energy drift {drift:+.4f} kJ/mol/ns/dof, fluctuation {fluctuation:.3f} kJ/mol "
+          f"(total energy {run.energies.mean():.1f} kJ/mol)")
+    print(f"  temperature: translational {translational:.1f} +- {translationalError:.1f} K, "
+          f"rotational {rotational:.1f} +- {rotationalError:.1f} K ({rotationalDofPerBody} per molecule); "
+          f"rotational - translational {excess:+.1f} +- {excessError:.1f} K")
+    print(f"  rigidity: largest change of an intramolecular distance {change:.1e} nm; largest distance from the "
+          f"best-fit {shape} through a molecule (RMS over its atoms) {extents[:, axis].max():.1e} nm")
