@@ -1,17 +1,12 @@
 #ifndef OPENMMRIGID_RIGIDBODYINTEGRATOR_H_
 #define OPENMMRIGID_RIGIDBODYINTEGRATOR_H_
 
-#include "openmm/Integrator.h"
-#include "openmm/Kernel.h"
+#include "RigidBodyIntegratorBase.h"
 #include "internal/windowsExportRigid.h"
-#include <iosfwd>
 #include <string>
 #include <vector>
 
 namespace OpenMMRigid {
-
-class IntegrateRigidBodyStepKernel;
-struct RigidBody;
 
 /**
  * This is an Integrator for systems of rigid molecules. Each rigid body moves by a symplectic,
@@ -47,15 +42,8 @@ struct RigidBody;
  * the integrator runs: each body is re-fitted by a mass-weighted least-squares rigid fit, and its
  * particle velocities are replaced by the rigid motion with the same linear and angular momentum.
  */
-class OPENMM_EXPORT_RIGID RigidBodyIntegrator : public OpenMM::Integrator {
+class OPENMM_EXPORT_RIGID RigidBodyIntegrator : public RigidBodyIntegratorBase {
 public:
-    /** How the orientation of each body is advanced during the free drift. */
-    enum RotationMethod {
-        /** The exact torque-free motion (van Zon and Schofield, 2007). */
-        Exact = 0,
-        /** The symplectic NO_SQUISH splitting of the free rotation (Miller et al., 2002). */
-        NoSquish = 1
-    };
     /**
      * Create a RigidBodyIntegrator whose bodies are the rigid constraint clusters of the System.
      *
@@ -98,16 +86,6 @@ public:
          */
         Omelyan4 = 3
     };
-    /** Get the method used to advance the orientation of each body. */
-    RotationMethod getRotationMethod() const {
-        return rotationMethod;
-    }
-    /**
-     * Set the method used to advance the orientation of each body.
-     *
-     * @throws OpenMMException if the value is not a RotationMethod
-     */
-    void setRotationMethod(RotationMethod method);
     /** Get the splitting: the sequence of kicks and drifts that makes one step. */
     Splitting getSplitting() const {
         return splitting;
@@ -124,90 +102,12 @@ public:
      * step starts with, so this is the number of drifts in a step.
      */
     int getNumForceEvaluations() const;
-    /** Get whether the bodies were given explicitly (rather than found from the System's constraints). */
-    bool hasExplicitBodies() const {
-        return explicitBodies;
-    }
-    /** Get the explicit bodies passed to the constructor (empty when they are found from the System). */
-    const std::vector<std::vector<int> >& getExplicitBodies() const {
-        return bodies;
-    }
-    /**
-     * Get the number of rigid bodies. Only available once the integrator is bound to a Context.
-     */
-    int getNumBodies() const;
-    /**
-     * Get the particle indices of a rigid body. Only available once the integrator is bound to a Context.
-     *
-     * @param index  the index of the body, from 0 to getNumBodies() - 1
-     */
-    std::vector<int> getBodyParticles(int index) const;
-    /**
-     * Get the kind of a rigid body: "point" (one particle: translation only), "linear" (two rotational
-     * degrees of freedom), "spherical", "symmetric" or "asymmetric" (by its principal moments).
-     * Only available once the integrator is bound to a Context; for an explicit body, once positions
-     * have been set.
-     *
-     * @param index  the index of the body, from 0 to getNumBodies() - 1
-     */
-    std::string getBodyKind(int index) const;
-    /**
-     * Get the principal moments of inertia of a rigid body, in amu nm^2, in ascending order.
-     *
-     * @param index  the index of the body, from 0 to getNumBodies() - 1
-     */
-    std::vector<double> getBodyMoments(int index) const;
-    /**
-     * Get the kinetic energy of the translation of the bodies' centres of mass plus that of the free
-     * particles, measured in kJ/mol. Only available once the integrator is bound to a Context.
-     */
-    double getTranslationalKineticEnergy();
-    /**
-     * Get the kinetic energy of the rotation of the bodies about their centres of mass, measured in kJ/mol.
-     * Only available once the integrator is bound to a Context.
-     */
-    double getRotationalKineticEnergy();
-    /**
-     * Get the number of degrees of freedom of the system as this integrator moves it: 3 per free
-     * particle, less one per constraint among free particles, plus 3 translational and 0 (point),
-     * 2 (linear) or 3 rotational ones per body, less 3 if the System has a CMMotionRemover. With it,
-     * the temperature is 2 KE / (dof k_B). Only available once the integrator is bound to a Context.
-     */
-    int getNumDegreesOfFreedom() const;
-    /**
-     * Get the instantaneous temperature of the system, 2 KE / (dof k_B) with dof from
-     * getNumDegreesOfFreedom(), measured in K. openmm.app.StateDataReporter uses this method when an
-     * integrator has it, so its temperature is right for explicit bodies too. Only available once
-     * the integrator is bound to a Context.
-     */
-    double computeSystemTemperature();
-    /**
-     * Advance a simulation through time by taking a series of time steps.
-     *
-     * @param steps   the number of time steps to take
-     */
-    void step(int steps);
 protected:
-    void initialize(OpenMM::ContextImpl& context);
-    void cleanup();
     std::vector<std::string> getKernelNames();
-    void stateChanged(OpenMM::State::DataType changed);
-    double computeKineticEnergy();
-    bool kineticEnergyRequiresForce() const {
-        return false;
-    }
-    void createCheckpoint(std::ostream& stream) const;
-    void loadCheckpoint(std::istream& stream);
+    void initializeKernel(OpenMM::ContextImpl& context);
+    void executeKernel(OpenMM::ContextImpl& context);
 private:
-    const IntegrateRigidBodyStepKernel& getKernel() const;
-    IntegrateRigidBodyStepKernel& getKernel();
-    const RigidBody& getShapedBody(int index) const;
-    std::vector<std::vector<int> > bodies;
-    bool explicitBodies;
-    RotationMethod rotationMethod;
     Splitting splitting;
-    bool bound, forcesAreValid, needsProjection;
-    OpenMM::Kernel kernel;
 };
 
 } // namespace OpenMMRigid

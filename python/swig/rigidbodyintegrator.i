@@ -1,4 +1,6 @@
-// OpenMMRigid::RigidBodyIntegrator as a subclass of openmm.Integrator.
+// OpenMMRigid::RigidBodyIntegrator (and, in rigidbodylangevinintegrator.i, RigidBodyLangevinIntegrator)
+// as subclasses of openmm.Integrator, through their common base RigidBodyIntegratorBase, which holds
+// the bodies, the rotation method and the questions one asks about them.
 //
 // OpenMM's own classes come from the openmm wheel's swig/OpenMMSwigHeaders.i, imported (not
 // included): the proxy class derives from openmm.Integrator, and SWIG's shared type table (runtime
@@ -24,6 +26,7 @@
 #include "openmm/RPMDIntegrator.h"
 #include "openmm/RPMDMonteCarloBarostat.h"
 #include "RigidBodyIntegrator.h"
+#include "RigidBodyLangevinIntegrator.h"
 #include "openmm/serialization/XmlSerializer.h"
 #include <climits>
 #include <sstream>
@@ -110,26 +113,35 @@ PyObject* intListToPython(const std::vector<int>& values) {
 namespace OpenMMRigid {
 namespace Python {
 
-/** Deserialize XML written by XmlSerializer for a RigidBodyIntegrator; the caller owns the result. */
-RigidBodyIntegrator* deserializeRigidBodyIntegrator(const std::string& xml) {
+/**
+ * Deserialize XML written by XmlSerializer for a RigidBodyIntegrator or RigidBodyLangevinIntegrator;
+ * the caller owns the result (openmmrigid/integrator.py gives it its most derived class).
+ */
+RigidBodyIntegratorBase* deserializeRigidIntegrator(const std::string& xml) {
     std::istringstream stream(xml);
     OpenMM::Integrator* integrator = OpenMM::XmlSerializer::deserialize<OpenMM::Integrator>(stream);
-    RigidBodyIntegrator* rigid = dynamic_cast<RigidBodyIntegrator*>(integrator);
+    RigidBodyIntegratorBase* rigid = dynamic_cast<RigidBodyIntegratorBase*>(integrator);
     if (rigid == NULL) {
         delete integrator;
-        throw OpenMM::OpenMMException("deserializeIntegrator: the XML does not describe a RigidBodyIntegrator");
+        throw OpenMM::OpenMMException("deserializeIntegrator: the XML does not describe a RigidBodyIntegrator or "
+                                      "a RigidBodyLangevinIntegrator");
     }
     return rigid;
 }
 
 /** A copy of integrator with every setting, not bound to any Context; the caller owns it. */
-RigidBodyIntegrator* cloneRigidBodyIntegrator(const RigidBodyIntegrator& integrator) {
-    return dynamic_cast<RigidBodyIntegrator*>(OpenMM::XmlSerializer::clone<OpenMM::Integrator>(integrator));
+RigidBodyIntegratorBase* cloneRigidIntegrator(const RigidBodyIntegratorBase& integrator) {
+    return dynamic_cast<RigidBodyIntegratorBase*>(OpenMM::XmlSerializer::clone<OpenMM::Integrator>(integrator));
 }
 
 /** integrator as a RigidBodyIntegrator (not a copy), or NULL if it is another kind of Integrator. */
 RigidBodyIntegrator* asRigidBodyIntegrator(OpenMM::Integrator* integrator) {
     return dynamic_cast<RigidBodyIntegrator*>(integrator);
+}
+
+/** integrator as a RigidBodyLangevinIntegrator (not a copy), or NULL if it is another kind of Integrator. */
+RigidBodyLangevinIntegrator* asRigidBodyLangevinIntegrator(OpenMM::Integrator* integrator) {
+    return dynamic_cast<RigidBodyLangevinIntegrator*>(integrator);
 }
 
 } // namespace Python
@@ -139,8 +151,9 @@ RigidBodyIntegrator* asRigidBodyIntegrator(OpenMM::Integrator* integrator) {
 // ---- typemaps ----
 
 %typemap(typecheck, precedence=SWIG_TYPECHECK_POINTER) const std::vector<std::vector<int> >& bodies {
-    // Only one constructor takes a second argument: let anything through, so that the in typemap
-    // reports what is wrong with it (as openmm.OpenMMException) rather than the overload dispatcher.
+    // Only one constructor of each class takes bodies (the last argument): let anything through, so
+    // that the in typemap reports what is wrong with it (as openmm.OpenMMException) rather than the
+    // overload dispatcher.
     $1 = 1;
 }
 %typemap(in) const std::vector<std::vector<int> >& bodies (std::vector<std::vector<int> > converted) {
@@ -188,16 +201,16 @@ import openmm as _openmm_package
     if len(args) > 0 and _unit.is_quantity(args[0]):
         args[0] = args[0].value_in_unit(_unit.picosecond)
 %}
-%pythonappend OpenMMRigid::RigidBodyIntegrator::getTranslationalKineticEnergy %{
+%pythonappend OpenMMRigid::RigidBodyIntegratorBase::getTranslationalKineticEnergy %{
     val = _unit.Quantity(val, _unit.kilojoule_per_mole)
 %}
-%pythonappend OpenMMRigid::RigidBodyIntegrator::getRotationalKineticEnergy %{
+%pythonappend OpenMMRigid::RigidBodyIntegratorBase::getRotationalKineticEnergy %{
     val = _unit.Quantity(val, _unit.kilojoule_per_mole)
 %}
-%pythonappend OpenMMRigid::RigidBodyIntegrator::computeSystemTemperature %{
+%pythonappend OpenMMRigid::RigidBodyIntegratorBase::computeSystemTemperature %{
     val = _unit.Quantity(val, _unit.kelvin)
 %}
-%pythonappend OpenMMRigid::RigidBodyIntegrator::getBodyMoments %{
+%pythonappend OpenMMRigid::RigidBodyIntegratorBase::getBodyMoments %{
     val = _unit.Quantity(val, _unit.amu*_unit.nanometer**2)
 %}
 
@@ -258,7 +271,7 @@ Examples
 >>> integrator.setRotationMethod(RigidBodyIntegrator.NoSquish)
 >>> integrator.setSplitting(RigidBodyIntegrator.Omelyan2)                    # two forces per step
 ";
-%feature("docstring") OpenMMRigid::RigidBodyIntegrator::getRotationMethod "
+%feature("docstring") OpenMMRigid::RigidBodyIntegratorBase::getRotationMethod "
 Get the method used to advance the orientation of each body.
 
 Returns
@@ -266,7 +279,7 @@ Returns
 int
     ``RigidBodyIntegrator.Exact`` (the default) or ``RigidBodyIntegrator.NoSquish``.
 ";
-%feature("docstring") OpenMMRigid::RigidBodyIntegrator::setRotationMethod "
+%feature("docstring") OpenMMRigid::RigidBodyIntegratorBase::setRotationMethod "
 Set the method used to advance the orientation of each body.
 
 Parameters
@@ -321,14 +334,14 @@ Returns
 -------
 int
 ";
-%feature("docstring") OpenMMRigid::RigidBodyIntegrator::hasExplicitBodies "
+%feature("docstring") OpenMMRigid::RigidBodyIntegratorBase::hasExplicitBodies "
 Get whether the bodies were given explicitly rather than found from the System's constraints.
 
 Returns
 -------
 bool
 ";
-%feature("docstring") OpenMMRigid::RigidBodyIntegrator::getExplicitBodies "
+%feature("docstring") OpenMMRigid::RigidBodyIntegratorBase::getExplicitBodies "
 Get the explicit bodies passed to the constructor.
 
 Returns
@@ -336,14 +349,14 @@ Returns
 list of list of int
     The particle indices of each body; empty when the bodies are found from the System.
 ";
-%feature("docstring") OpenMMRigid::RigidBodyIntegrator::getNumBodies "
+%feature("docstring") OpenMMRigid::RigidBodyIntegratorBase::getNumBodies "
 Get the number of rigid bodies. Only available once the integrator is bound to a Context.
 
 Returns
 -------
 int
 ";
-%feature("docstring") OpenMMRigid::RigidBodyIntegrator::getBodyParticles "
+%feature("docstring") OpenMMRigid::RigidBodyIntegratorBase::getBodyParticles "
 Get the particle indices of a rigid body. Only available once the integrator is bound to a Context.
 
 Parameters
@@ -355,7 +368,7 @@ Returns
 -------
 list of int
 ";
-%feature("docstring") OpenMMRigid::RigidBodyIntegrator::getBodyKind "
+%feature("docstring") OpenMMRigid::RigidBodyIntegratorBase::getBodyKind "
 Get the kind of a rigid body. Only available once the integrator is bound to a Context (for an
 explicit body, once positions have been set).
 
@@ -370,7 +383,7 @@ str
     \"point\" (one particle: translation only), \"linear\" (two rotational degrees of freedom),
     \"spherical\", \"symmetric\" or \"asymmetric\" (by its principal moments).
 ";
-%feature("docstring") OpenMMRigid::RigidBodyIntegrator::getBodyMoments "
+%feature("docstring") OpenMMRigid::RigidBodyIntegratorBase::getBodyMoments "
 Get the principal moments of inertia of a rigid body, in ascending order.
 
 Parameters
@@ -383,7 +396,7 @@ Returns
 openmm.unit.Quantity
     A list of three moments, in amu nm^2.
 ";
-%feature("docstring") OpenMMRigid::RigidBodyIntegrator::getTranslationalKineticEnergy "
+%feature("docstring") OpenMMRigid::RigidBodyIntegratorBase::getTranslationalKineticEnergy "
 Get the kinetic energy of the translation of the bodies' centres of mass plus that of the free
 particles. Only available once the integrator is bound to a Context.
 
@@ -392,7 +405,7 @@ Returns
 openmm.unit.Quantity
     The energy, in kJ/mol.
 ";
-%feature("docstring") OpenMMRigid::RigidBodyIntegrator::getRotationalKineticEnergy "
+%feature("docstring") OpenMMRigid::RigidBodyIntegratorBase::getRotationalKineticEnergy "
 Get the kinetic energy of the rotation of the bodies about their centres of mass. Only available
 once the integrator is bound to a Context.
 
@@ -401,7 +414,7 @@ Returns
 openmm.unit.Quantity
     The energy, in kJ/mol.
 ";
-%feature("docstring") OpenMMRigid::RigidBodyIntegrator::getNumDegreesOfFreedom "
+%feature("docstring") OpenMMRigid::RigidBodyIntegratorBase::getNumDegreesOfFreedom "
 Get the number of degrees of freedom of the system as this integrator moves it. Only available
 once the integrator is bound to a Context.
 
@@ -413,7 +426,7 @@ Returns
 -------
 int
 ";
-%feature("docstring") OpenMMRigid::RigidBodyIntegrator::step "
+%feature("docstring") OpenMMRigid::RigidBodyIntegratorBase::step "
 Advance a simulation through time by taking a series of time steps.
 
 Parameters
@@ -422,36 +435,41 @@ steps : int
     The number of time steps to take.
 ";
 
-// ---- the class ----
+// ---- the classes ----
+
+%feature("docstring") OpenMMRigid::RigidBodyIntegratorBase "
+The base of RigidBodyIntegrator and RigidBodyLangevinIntegrator: the bodies, the rotation method of
+their free drift, and the questions one may ask about them (kinds, moments, kinetic energies,
+degrees of freedom, temperature). It cannot be created on its own.
+";
 
 #define OPENMM_EXPORT_RIGID
 // The helpers behind pickle, copy and XmlSerializer (openmmrigid/integrator.py); private names.
-%rename(_deserializeRigidBodyIntegrator) OpenMMRigid::Python::deserializeRigidBodyIntegrator;
-%rename(_cloneRigidBodyIntegrator) OpenMMRigid::Python::cloneRigidBodyIntegrator;
+%rename(_deserializeRigidIntegrator) OpenMMRigid::Python::deserializeRigidIntegrator;
+%rename(_cloneRigidIntegrator) OpenMMRigid::Python::cloneRigidIntegrator;
 %rename(_asRigidBodyIntegrator) OpenMMRigid::Python::asRigidBodyIntegrator;
-%newobject OpenMMRigid::Python::deserializeRigidBodyIntegrator;
-%newobject OpenMMRigid::Python::cloneRigidBodyIntegrator;
+%rename(_asRigidBodyLangevinIntegrator) OpenMMRigid::Python::asRigidBodyLangevinIntegrator;
+%newobject OpenMMRigid::Python::deserializeRigidIntegrator;
+%newobject OpenMMRigid::Python::cloneRigidIntegrator;
+%include "RigidBodyIntegratorBase.h"
 %include "RigidBodyIntegrator.h"
 
-namespace OpenMMRigid {
-namespace Python {
-RigidBodyIntegrator* deserializeRigidBodyIntegrator(const std::string& xml);
-RigidBodyIntegrator* cloneRigidBodyIntegrator(const RigidBodyIntegrator& integrator);
-RigidBodyIntegrator* asRigidBodyIntegrator(OpenMM::Integrator* integrator);
-} // namespace Python
-} // namespace OpenMMRigid
-
-%extend OpenMMRigid::RigidBodyIntegrator {
+%extend OpenMMRigid::RigidBodyIntegratorBase {
 %pythoncode %{
     def __getstate__(self):
         return _openmm_package.XmlSerializer.serialize(self)
 
     def __setstate__(self, serializationString):
-        integrator = _deserializeRigidBodyIntegrator(serializationString)
+        from openmmrigid.integrator import _mostDerived
+        integrator = _mostDerived(_deserializeRigidIntegrator(serializationString))
+        if not isinstance(integrator, type(self)):
+            raise _openmm_package.OpenMMException(
+                f"{type(self).__name__}: the serialized integrator is a {type(integrator).__name__}")
         self.this = integrator.this
 
     def __copy__(self):
-        duplicate = _cloneRigidBodyIntegrator(self)
+        from openmmrigid.integrator import _mostDerived
+        duplicate = _mostDerived(_cloneRigidIntegrator(self))
         duplicate.__class__ = self.__class__
         attributes = {key: value for key, value in self.__dict__.items() if key != 'this'}
         from copy import deepcopy
