@@ -318,14 +318,22 @@ void RigidBodyDynamics::thermalize(vector<Vec3>& positions, vector<Vec3>& veloci
         for (int k = 0; k < 3; k++)
             state.velocity[k] = c*state.velocity[k] + velocityNoise*normal.next();
         // In the principal frame the rotational kinetic energy is sum L_k^2 / (2 I_k): each component
-        // is an independent Gaussian of variance I_k kT.
-        Vector3 bodyMomentum = multiply(state.attitude, state.angularMomentum);
-        for (int k = 0; k < 3; k++) {
-            double xi = normal.next();  // drawn for every axis, so that each body uses its stream alike
-            if (body.moments[k] > 0.0)
-                bodyMomentum[k] = c*bodyMomentum[k] + noise*sqrt(body.moments[k])*xi;
+        // is an independent Gaussian of variance I_k kT (none along the axis of a linear body, I_0 = 0).
+        // The deviates are drawn in the lab frame and turned into the body frame: a rotated isotropic
+        // Gaussian is one, and the noise in the lab, A^T diag(sqrt(I_k)) A xi, is then the square
+        // root of the lab inertia tensor applied to xi, whatever principal axes (signs, order of
+        // equal moments, turn of a linear body about its axis) the body's shape was given. So a
+        // trajectory does not depend on how or when the body was fitted (a checkpoint loaded into
+        // a new Context continues it).
+        Vector3 xi;
+        for (int k = 0; k < 3; k++)
+            xi[k] = normal.next();
+        if (body.kind != RigidBody::Point) {
+            Vector3 bodyMomentum = multiply(state.attitude, state.angularMomentum), bodyXi = multiply(state.attitude, xi);
+            for (int k = 0; k < 3; k++)
+                bodyMomentum[k] = c*bodyMomentum[k] + noise*sqrt(body.moments[k])*bodyXi[k];
+            state.angularMomentum = multiplyTransposed(state.attitude, bodyMomentum);
         }
-        state.angularMomentum = multiplyTransposed(state.attitude, bodyMomentum);
     });
     const vector<int>& free = system.getFreeParticles();
     const uint32_t firstStream = bodies.size();

@@ -90,8 +90,9 @@ public:
      *     L_k <- c L_k + sqrt((1 - c^2) I_k kT) xi_k        (each principal axis with I_k > 0)
      *
      * where L_k is the angular momentum in the body's principal frame, whose canonical distribution
-     * is Gaussian with variance I_k kT; the axis of a linear body (I_k = 0) carries none, and a
-     * single-particle body has no rotation. Free particles: v <- c v + sqrt((1 - c^2) kT / m) xi,
+     * is Gaussian with variance I_k kT; the axis of a linear body (I_0 = 0) carries none, and a
+     * single-particle body has no rotation. The xi_k are the body-frame components of a lab-frame
+     * standard normal vector, so that the noise does not depend on the choice of principal axes. Free particles: v <- c v + sqrt((1 - c^2) kT / m) xi,
      * then the velocity constraints among them. Body particle velocities are written by the closing
      * kick, as always.
      *
