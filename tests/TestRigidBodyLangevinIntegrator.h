@@ -114,11 +114,14 @@ void testPhiloxKnownAnswers() {
  * c^8 = 0.02, so they count as independent. Checked by kind: translation (bodies and free atoms),
  * and the rotation of linear, spherical, symmetric and asymmetric bodies; a wrong noise amplitude
  * for any of them (sqrt(I) for I, 1 - c for 1 - c^2, noise along a linear body's axis) shifts the mean.
+ * NO_SQUISH's free rotation keeps the kinetic energy too (it is a composition of exact rotations
+ * about the principal axes), so the same holds with either rotation method.
  */
-void testCanonicalKineticEnergy(Platform& platform) {
+void testCanonicalKineticEnergy(Platform& platform, RigidBodyIntegratorBase::RotationMethod method) {
     Scene scene = makeCluster(5, 4, 4, 4, false);
     const double temperature = 300, kT = boltzmann*temperature, dt = 0.002, friction = 0.5/dt;
     LangevinRun run = startLangevin(scene, platform, temperature, friction, dt, 17);
+    run.integrator->setRotationMethod(method);
     const vector<string> kinds = {"point", "linear", "spherical", "symmetric", "asymmetric"};
     vector<string> kindOf(scene.bodies.size());
     std::map<string, int> rotationalDof = {{"point", 0}, {"linear", 2}, {"spherical", 3}, {"symmetric", 3}, {"asymmetric", 3}};
@@ -160,7 +163,7 @@ void testCanonicalKineticEnergy(Platform& platform) {
         double mean, meanError, variance, varianceError;
         sampleMoments(energies, mean, meanError, variance, varianceError);
         double expectedMean = 0.5*n*kT, expectedVariance = 0.5*n*kT*kT;
-        string report = message(what, " (", n, " dof): mean ", mean, " +- ", meanError, " kJ/mol (expected ", expectedMean,
+        string report = message(methodName(method), ", ", what, " (", n, " dof): mean ", mean, " +- ", meanError, " kJ/mol (expected ", expectedMean,
                                 "), variance ", variance, " +- ", varianceError, " (expected ", expectedVariance, ")");
         std::cout << report << std::endl;
         check(fabs(mean - expectedMean) < 5*meanError, report);
@@ -412,7 +415,8 @@ void testBadTemperatureAndFriction(Platform& platform) {
 int runLangevinTests(Platform& platform) {
     vector<std::pair<string, std::function<void()> > > tests = {
         {"Philox4x32-10 known answers and normal deviates", []() { testPhiloxKnownAnswers(); }},
-        {"canonical kinetic energy of free bodies", [&]() { testCanonicalKineticEnergy(platform); }},
+        {"canonical kinetic energy of free bodies (Exact)", [&]() { testCanonicalKineticEnergy(platform, RigidBodyIntegratorBase::Exact); }},
+        {"canonical kinetic energy of free bodies (NoSquish)", [&]() { testCanonicalKineticEnergy(platform, RigidBodyIntegratorBase::NoSquish); }},
         {"harmonic trap: BAOAB positions and velocities", [&]() { testHarmonicTrap(platform); }},
         {"damped at zero temperature", [&]() { testDampedAtZeroTemperature(platform); }},
         {"friction 0 is the constant-energy step", [&]() { testFrictionZero(platform); }},
