@@ -1192,7 +1192,7 @@ int runTestList(const vector<std::pair<string, std::function<void()> > >& tests)
 
 /**
  * The main() of a platform's test file: set the platform up (load it, register our kernels), run
- * every test on it (runPlatformTests, or another set such as TestRigidBodyLangevinIntegrator.h's),
+ * every test on it (runPlatformTests, or another set such as TestRigidBodyThermostats.h's),
  * and report the way ctest and OpenMM's own tests do.
  */
 inline int runMain(const std::function<Platform&()>& setUpPlatform,

@@ -26,6 +26,12 @@ namespace OpenMMRigid {
  * Mryglod and Folk, Comput. Phys. Commun. 146, 188 (2002) (Omelyan4). Bodies and free particles
  * follow the same sequence.
  *
+ * Without more, the integrator conserves the energy. setThermostat() adds the global stochastic
+ * velocity rescaling of Bussi, Donadio and Parrinello (2007) after every step, for constant
+ * temperature; RigidBodyLangevinIntegrator is the Langevin alternative. The questions one may ask
+ * about the bodies (kinds, moments, kinetic energies, degrees of freedom) are those of
+ * RigidBodyIntegratorBase.
+ *
  * The bodies are either found in the System when the Context is created (every cluster of three or
  * more particles that its constraints hold rigid: the rigid waters of TIP3P, SPC/E, TIP4P-Ew and
  * TIP5P, or any other rigid constraint cluster), or given explicitly as lists of particle indices.
@@ -102,12 +108,64 @@ public:
      * step starts with, so this is the number of drifts in a step.
      */
     int getNumForceEvaluations() const;
+    /**
+     * Add a thermostat: after every step the velocities of all bodies (linear and angular) and free
+     * particles are scaled by one common factor, which samples the kinetic energy from the exact
+     * solution of the stochastic velocity rescaling of G. Bussi, D. Donadio and M. Parrinello, J.
+     * Chem. Phys. 126, 014101 (2007), eq. (A7), over one step, with the degrees of freedom of
+     * getNumDegreesOfFreedom(). The system then samples the canonical ensemble, and the total energy
+     * minus getThermostatWork() (Bussi's effective energy) is conserved as the total energy is without
+     * a thermostat. Replaces any thermostat set before; takes effect at the next step.
+     *
+     * @param temperature    the temperature of the heat bath, measured in Kelvin (0 damps the motion)
+     * @param collisionTime  tau, the relaxation time of the kinetic energy, measured in ps
+     * @throws OpenMMException if the temperature is negative or not finite, or the collision time not positive and finite
+     */
+    void setThermostat(double temperature, double collisionTime);
+    /** Remove the thermostat: the integrator conserves the energy again (the default). */
+    void removeThermostat() {
+        thermostat = false;
+    }
+    /** Get whether a thermostat is set. */
+    bool hasThermostat() const {
+        return thermostat;
+    }
+    /** Get the temperature of the thermostat, in Kelvin (0 if none was ever set). */
+    double getThermostatTemperature() const {
+        return thermostatTemperature;
+    }
+    /** Get the collision time tau of the thermostat, in ps (0 if none was ever set). */
+    double getThermostatCollisionTime() const {
+        return thermostatCollisionTime;
+    }
+    /**
+     * Get the kinetic energy the thermostat has added to the system since the Context was created
+     * (negative where it removed energy), measured in kJ/mol. The total energy minus this is
+     * Bussi's effective energy, conserved up to the integration error. Saved in checkpoints. Only
+     * available once the integrator is bound to a Context.
+     */
+    double getThermostatWork();
+    /** Get the random number seed of the thermostat. See setRandomNumberSeed() for details. */
+    int getRandomNumberSeed() const {
+        return randomNumberSeed;
+    }
+    /**
+     * Set the random number seed of the thermostat, read when a Context is created. With the same
+     * seed the Reference and CPU platforms give the same trajectory, with any number of threads;
+     * different seeds give different ones. 0 (the default) picks a new seed for every Context.
+     */
+    void setRandomNumberSeed(int seed) {
+        randomNumberSeed = seed;
+    }
 protected:
     std::vector<std::string> getKernelNames();
     void initializeKernel(OpenMM::ContextImpl& context);
     void executeKernel(OpenMM::ContextImpl& context);
 private:
     Splitting splitting;
+    bool thermostat;
+    double thermostatTemperature, thermostatCollisionTime;
+    int randomNumberSeed;
 };
 
 } // namespace OpenMMRigid

@@ -124,6 +124,7 @@ protected:
     bool kineticEnergyRequiresForce() const {
         return false;
     }
+    /** The kernel writes the state of its random numbers (after the positions and velocities OpenMM writes). */
     void createCheckpoint(std::ostream& stream) const;
     void loadCheckpoint(std::istream& stream);
     /** Initialize the kernel just created for this integrator (the concrete class knows its type). */

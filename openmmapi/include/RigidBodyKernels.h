@@ -38,6 +38,13 @@ public:
     virtual void computeKineticEnergies(OpenMM::ContextImpl& context, double& translational, double& rotational) = 0;
     /** The bodies, as found when the kernel was initialized. */
     virtual const RigidBodySystem& getBodies() const = 0;
+    /** Write the kernel's own state (the random numbers and what they produced) to a checkpoint. */
+    virtual void createCheckpoint(OpenMM::ContextImpl& context, std::ostream& stream) const = 0;
+    /**
+     * Read the state written by createCheckpoint(). A stream that ends here (a checkpoint written
+     * before the kernel had a state to save) leaves the state as it is.
+     */
+    virtual void loadCheckpoint(OpenMM::ContextImpl& context, std::istream& stream) = 0;
 };
 
 /**
@@ -52,7 +59,8 @@ public:
     IntegrateRigidBodyStepKernel(std::string name, const OpenMM::Platform& platform) : RigidBodyStepKernel(name, platform) {
     }
     /**
-     * Initialize the kernel: find the bodies and check the System against them.
+     * Initialize the kernel: find the bodies, check the System against them and seed the random
+     * numbers of the thermostat (a seed of 0 picks one at random).
      *
      * @param context     the context the integrator is bound to
      * @param integrator  the RigidBodyIntegrator this kernel is used for
@@ -60,14 +68,17 @@ public:
     virtual void initialize(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) = 0;
     /**
      * Execute the kernel: one step of the integrator's splitting (internal/Splitting.h), with the
-     * virtual sites placed and the forces evaluated after every drift. On entry the context holds
-     * the forces at the current positions, and the bodies agree with them (see project()); on exit
-     * it holds the forces at the new positions.
+     * virtual sites placed and the forces evaluated after every drift, then, if the integrator has
+     * a thermostat, the stochastic rescaling of the velocities. On entry the context holds the forces
+     * at the current positions, and the bodies agree with them (see project()); on exit it holds the
+     * forces at the new positions.
      *
      * @param context     the context in which to execute this kernel
      * @param integrator  the RigidBodyIntegrator this kernel is being used for
      */
     virtual void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) = 0;
+    /** The kinetic energy the thermostat has added since the kernel was created (negative if it removed energy). */
+    virtual double getThermostatWork() const = 0;
 };
 
 /**
@@ -98,10 +109,6 @@ public:
      * @param integrator  the RigidBodyLangevinIntegrator this kernel is being used for
      */
     virtual void execute(OpenMM::ContextImpl& context, const RigidBodyLangevinIntegrator& integrator) = 0;
-    /** Write the state of the random numbers (seed and counter) to a checkpoint. */
-    virtual void createCheckpoint(OpenMM::ContextImpl& context, std::ostream& stream) const = 0;
-    /** Read the state of the random numbers written by createCheckpoint(). */
-    virtual void loadCheckpoint(OpenMM::ContextImpl& context, std::istream& stream) = 0;
 };
 
 } // namespace OpenMMRigid

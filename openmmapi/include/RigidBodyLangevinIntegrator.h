@@ -3,7 +3,6 @@
 
 #include "RigidBodyIntegratorBase.h"
 #include "internal/windowsExportRigid.h"
-#include <iosfwd>
 #include <string>
 #include <vector>
 
@@ -122,9 +121,6 @@ protected:
     std::vector<std::string> getKernelNames();
     void initializeKernel(OpenMM::ContextImpl& context);
     void executeKernel(OpenMM::ContextImpl& context);
-    /** Also saves the state of the random number generator. */
-    void createCheckpoint(std::ostream& stream) const;
-    void loadCheckpoint(std::istream& stream);
 private:
     double temperature, friction;
     int randomNumberSeed;

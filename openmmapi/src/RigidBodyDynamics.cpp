@@ -348,6 +348,20 @@ void RigidBodyDynamics::thermalize(vector<Vec3>& positions, vector<Vec3>& veloci
         constraints->applyToVelocities(positions, velocities, inverseMasses, constraintTolerance);
 }
 
+void RigidBodyDynamics::scaleVelocities(vector<Vec3>& velocities, double alpha) {
+    for (BodyState& state : states)
+        for (int k = 0; k < 3; k++) {
+            state.velocity[k] *= alpha;
+            state.angularMomentum[k] *= alpha;
+        }
+    for (const RigidBody& body : system.getBodies())
+        for (int p : body.particles)
+            velocities[p] *= alpha;
+    for (int p : system.getFreeParticles())
+        velocities[p] *= alpha;
+    writtenVelocities = velocities;
+}
+
 void RigidBodyDynamics::closingKick(vector<Vec3>& positions, vector<Vec3>& velocities, const vector<Vec3>& forces,
                                     double kick, double constraintTolerance) {
     const vector<RigidBody>& bodies = system.getBodies();

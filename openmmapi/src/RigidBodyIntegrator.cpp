@@ -1,7 +1,10 @@
 #include "RigidBodyIntegrator.h"
 #include "RigidBodyKernels.h"
 #include "internal/Splitting.h"
+#include "openmm/OpenMMException.h"
 #include "openmm/internal/ContextImpl.h"
+#include <cmath>
+#include <sstream>
 #include <string>
 
 using namespace OpenMM;
@@ -10,11 +13,12 @@ using namespace std;
 namespace OpenMMRigid {
 
 RigidBodyIntegrator::RigidBodyIntegrator(double stepSize) : RigidBodyIntegratorBase("RigidBodyIntegrator", stepSize),
-        splitting(Verlet) {
+        splitting(Verlet), thermostat(false), thermostatTemperature(0.0), thermostatCollisionTime(0.0), randomNumberSeed(0) {
 }
 
 RigidBodyIntegrator::RigidBodyIntegrator(double stepSize, const vector<vector<int> >& bodies) :
-        RigidBodyIntegratorBase("RigidBodyIntegrator", stepSize, bodies), splitting(Verlet) {
+        RigidBodyIntegratorBase("RigidBodyIntegrator", stepSize, bodies), splitting(Verlet), thermostat(false),
+        thermostatTemperature(0.0), thermostatCollisionTime(0.0), randomNumberSeed(0) {
 }
 
 void RigidBodyIntegrator::setSplitting(Splitting value) {
@@ -24,6 +28,24 @@ void RigidBodyIntegrator::setSplitting(Splitting value) {
 
 int RigidBodyIntegrator::getNumForceEvaluations() const {
     return splittingScheme(splitting).numDrifts;
+}
+
+void RigidBodyIntegrator::setThermostat(double temperature, double collisionTime) {
+    if (!(isfinite(temperature) && temperature >= 0.0) || !(isfinite(collisionTime) && collisionTime > 0.0)) {
+        stringstream text;
+        text.precision(17);
+        text << "RigidBodyIntegrator: the thermostat needs a finite temperature >= 0 (in K) and a finite collision time > 0 "
+                "(in ps); got temperature " << temperature << ", collision time " << collisionTime;
+        throw OpenMMException(text.str());
+    }
+    thermostat = true;
+    thermostatTemperature = temperature;
+    thermostatCollisionTime = collisionTime;
+}
+
+double RigidBodyIntegrator::getThermostatWork() {
+    getKernel();  // throws unless bound
+    return kernel.getAs<IntegrateRigidBodyStepKernel>().getThermostatWork();
 }
 
 vector<string> RigidBodyIntegrator::getKernelNames() {

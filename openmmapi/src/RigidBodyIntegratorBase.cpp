@@ -138,10 +138,13 @@ double RigidBodyIntegratorBase::computeKineticEnergy() {
 }
 
 void RigidBodyIntegratorBase::createCheckpoint(ostream& stream) const {
-    // The bodies' state is a function of the positions and velocities the checkpoint already holds.
+    // The bodies' state is a function of the positions and velocities the checkpoint already holds;
+    // the kernel adds the state of its random numbers.
+    getKernel().createCheckpoint(*context, stream);
 }
 
 void RigidBodyIntegratorBase::loadCheckpoint(istream& stream) {
+    getKernel().loadCheckpoint(*context, stream);
     needsProjection = true;
     forcesAreValid = false;
 }

@@ -62,14 +62,4 @@ void RigidBodyLangevinIntegrator::executeKernel(ContextImpl& context) {
     kernel.getAs<IntegrateRigidBodyLangevinStepKernel>().execute(context, *this);
 }
 
-void RigidBodyLangevinIntegrator::createCheckpoint(ostream& stream) const {
-    RigidBodyIntegratorBase::createCheckpoint(stream);
-    kernel.getAs<const IntegrateRigidBodyLangevinStepKernel>().createCheckpoint(*context, stream);
-}
-
-void RigidBodyLangevinIntegrator::loadCheckpoint(istream& stream) {
-    RigidBodyIntegratorBase::loadCheckpoint(stream);
-    kernel.getAs<IntegrateRigidBodyLangevinStepKernel>().loadCheckpoint(*context, stream);
-}
-
 } // namespace OpenMMRigid

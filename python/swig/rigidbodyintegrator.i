@@ -201,6 +201,21 @@ import openmm as _openmm_package
     if len(args) > 0 and _unit.is_quantity(args[0]):
         args[0] = args[0].value_in_unit(_unit.picosecond)
 %}
+%pythonprepend OpenMMRigid::RigidBodyIntegrator::setThermostat %{
+    if _unit.is_quantity(temperature):
+        temperature = temperature.value_in_unit(_unit.kelvin)
+    if _unit.is_quantity(collisionTime):
+        collisionTime = collisionTime.value_in_unit(_unit.picosecond)
+%}
+%pythonappend OpenMMRigid::RigidBodyIntegrator::getThermostatTemperature %{
+    val = _unit.Quantity(val, _unit.kelvin)
+%}
+%pythonappend OpenMMRigid::RigidBodyIntegrator::getThermostatCollisionTime %{
+    val = _unit.Quantity(val, _unit.picosecond)
+%}
+%pythonappend OpenMMRigid::RigidBodyIntegrator::getThermostatWork %{
+    val = _unit.Quantity(val, _unit.kilojoule_per_mole)
+%}
 %pythonappend OpenMMRigid::RigidBodyIntegratorBase::getTranslationalKineticEnergy %{
     val = _unit.Quantity(val, _unit.kilojoule_per_mole)
 %}
@@ -234,6 +249,10 @@ and R. Folk, Phys. Rev. E 65, 056706 (2002); two force evaluations per step), ``
 (Yoshida's fourth-order triple jump, Phys. Lett. A 150, 262 (1990); three) or ``Omelyan4`` (the
 optimized fourth-order Forest-Ruth-like scheme of Omelyan, Mryglod and Folk, Comput. Phys. Commun.
 146, 188 (2002); four).
+
+Without more the integrator conserves the energy; ``setThermostat(temperature, collisionTime)``
+adds the stochastic velocity rescaling of Bussi, Donadio and Parrinello (2007) after every step for
+constant temperature (``RigidBodyLangevinIntegrator`` is the Langevin alternative).
 
 The bodies are either found in the System when the Context is created (every cluster of three or
 more particles that its constraints hold rigid, such as rigid water), or given explicitly as lists
@@ -270,6 +289,7 @@ Examples
 >>> integrator = RigidBodyIntegrator(0.002, [[0, 1, 2], [3, 4, 5, 6]])      # explicit bodies
 >>> integrator.setRotationMethod(RigidBodyIntegrator.NoSquish)
 >>> integrator.setSplitting(RigidBodyIntegrator.Omelyan2)                    # two forces per step
+>>> integrator.setThermostat(300*unit.kelvin, 0.1*unit.picosecond)          # constant temperature
 ";
 %feature("docstring") OpenMMRigid::RigidBodyIntegratorBase::getRotationMethod "
 Get the method used to advance the orientation of each body.
@@ -325,6 +345,82 @@ Raises
 ------
 openmm.OpenMMException
     If splitting is not one of these values.
+";
+%feature("docstring") OpenMMRigid::RigidBodyIntegrator::setThermostat "
+Add a thermostat: global stochastic velocity rescaling after every step.
+
+After every step all momenta (the bodies' linear and angular ones and the free particles') are
+scaled by one common factor, which samples the kinetic energy from the exact solution over one step
+of the stochastic velocity rescaling of G. Bussi, D. Donadio and M. Parrinello, J. Chem. Phys. 126,
+014101 (2007), eq. (A7), with the degrees of freedom of ``getNumDegreesOfFreedom()``. The system
+then samples the canonical ensemble; the total energy minus ``getThermostatWork()`` (Bussi's
+effective energy) is conserved as the total energy is without a thermostat. Replaces any thermostat
+set before; takes effect at the next step.
+
+Parameters
+----------
+temperature : float or openmm.unit.Quantity
+    The temperature of the heat bath, in K if a plain number (0 damps the motion).
+collisionTime : float or openmm.unit.Quantity
+    tau, the relaxation time of the kinetic energy, in ps if a plain number.
+
+Raises
+------
+openmm.OpenMMException
+    If the temperature is negative or not finite, or the collision time is not positive and finite.
+";
+%feature("docstring") OpenMMRigid::RigidBodyIntegrator::removeThermostat "
+Remove the thermostat: the integrator conserves the energy again (the default).
+";
+%feature("docstring") OpenMMRigid::RigidBodyIntegrator::hasThermostat "
+Get whether a thermostat is set.
+
+Returns
+-------
+bool
+";
+%feature("docstring") OpenMMRigid::RigidBodyIntegrator::getThermostatTemperature "
+Get the temperature of the thermostat (0 K if none was ever set).
+
+Returns
+-------
+openmm.unit.Quantity
+    The temperature, in K.
+";
+%feature("docstring") OpenMMRigid::RigidBodyIntegrator::getThermostatCollisionTime "
+Get the collision time tau of the thermostat (0 ps if none was ever set).
+
+Returns
+-------
+openmm.unit.Quantity
+    The collision time, in ps.
+";
+%feature("docstring") OpenMMRigid::RigidBodyIntegrator::getThermostatWork "
+Get the kinetic energy the thermostat has added since the Context was created (negative where it
+removed energy). The total energy minus this is Bussi's effective energy, conserved up to the
+integration error. Saved in checkpoints. Only available once the integrator is bound to a Context.
+
+Returns
+-------
+openmm.unit.Quantity
+    The energy, in kJ/mol.
+";
+%feature("docstring") OpenMMRigid::RigidBodyIntegrator::setRandomNumberSeed "
+Set the random number seed of the thermostat, read when a Context is created.
+
+With the same seed, the Reference and CPU platforms give the same trajectory, with any number of
+threads; different seeds give different ones. 0 (the default) picks a new seed for every Context.
+
+Parameters
+----------
+seed : int
+";
+%feature("docstring") OpenMMRigid::RigidBodyIntegrator::getRandomNumberSeed "
+Get the random number seed of the thermostat (0: a new one is chosen for every Context).
+
+Returns
+-------
+int
 ";
 %feature("docstring") OpenMMRigid::RigidBodyIntegrator::getNumForceEvaluations "
 Get the number of force evaluations per step that the splitting takes: 1 (Verlet), 2 (Omelyan2),

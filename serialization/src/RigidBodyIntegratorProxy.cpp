@@ -14,8 +14,11 @@ namespace OpenMMRigid {
 
 namespace {
 
-/** The format written by serialize(). Version 1: the first. Version 2: adds the splitting. */
-const int CURRENT_VERSION = 2;
+/**
+ * The format written by serialize(). Version 1: the first. Version 2: adds the splitting. Version 3:
+ * adds the thermostat (thermostat, thermostatTemperature, thermostatCollisionTime) and randomSeed.
+ */
+const int CURRENT_VERSION = 3;
 
 } // namespace
 
@@ -27,6 +30,10 @@ void RigidBodyIntegratorProxy::serialize(const void* object, SerializationNode& 
     const RigidBodyIntegrator& integrator = *reinterpret_cast<const RigidBodyIntegrator*>(object);
     serializeRigidIntegratorBase(integrator, node);
     node.setIntProperty("splitting", integrator.getSplitting());
+    node.setBoolProperty("thermostat", integrator.hasThermostat());
+    node.setDoubleProperty("thermostatTemperature", integrator.getThermostatTemperature());
+    node.setDoubleProperty("thermostatCollisionTime", integrator.getThermostatCollisionTime());
+    node.setIntProperty("randomSeed", integrator.getRandomNumberSeed());
 }
 
 void* RigidBodyIntegratorProxy::deserialize(const SerializationNode& node) const {
@@ -45,6 +52,10 @@ void* RigidBodyIntegratorProxy::deserialize(const SerializationNode& node) const
     // Version 1 files have no splitting: they were written when every step was Verlet.
     int splitting = node.getIntProperty("splitting", RigidBodyIntegrator::Verlet);
     integrator->setSplitting(static_cast<RigidBodyIntegrator::Splitting>(splitting));
+    // Versions 1 and 2 have no thermostat: they were written when the integrator conserved energy.
+    if (node.getBoolProperty("thermostat", false))
+        integrator->setThermostat(node.getDoubleProperty("thermostatTemperature"), node.getDoubleProperty("thermostatCollisionTime"));
+    integrator->setRandomNumberSeed(node.getIntProperty("randomSeed", integrator->getRandomNumberSeed()));
     return integrator.release();
 }
 

@@ -33,6 +33,7 @@ namespace OpenMMRigid {
  *
  *   drift(b):            the free drift alone (the second half drift of a Langevin step).
  *   thermalize(c, kT):   the exact Ornstein-Uhlenbeck step of the momenta (see below).
+ *   scaleVelocities(a):  every momentum times a (a thermostat's rescaling, after the closing kick).
  *
  * Each is one pass over the bodies (on the thread pool, if there is one). Between them the body
  * momenta live in this class; the particle velocities of the bodies are written once per step.
@@ -109,6 +110,12 @@ public:
      */
     void thermalize(std::vector<OpenMM::Vec3>& positions, std::vector<OpenMM::Vec3>& velocities, double c, double kT,
                     uint64_t seed, uint64_t step, double constraintTolerance);
+    /**
+     * Scale every momentum (bodies' linear and angular, free particles') by alpha, after the closing
+     * kick: the stochastic velocity rescaling of RigidBodyIntegrator's thermostat. The velocity
+     * constraints among free particles stay satisfied.
+     */
+    void scaleVelocities(std::vector<OpenMM::Vec3>& velocities, double alpha);
     /**
      * The last kick of a step: kick every body and free particle by the forces, write the bodies'
      * rigid velocities to their particles and apply the velocity constraints of the free particles.

@@ -43,7 +43,7 @@ inline std::array<uint32_t, 4> philox4x32(std::array<uint32_t, 4> counter, std::
 }
 
 /**
- * A stream of standard normal deviates for one (key, stream, step): block b of the stream is the
+ * A stream of standard normal (and uniform) deviates for one (key, stream, step): block b of the stream is the
  * Philox output for the counter (stream, step low word, step high word, b). Streams with different
  * (stream, step) never share a counter, so their numbers are independent.
  */
@@ -64,13 +64,13 @@ public:
         spareValue = radius*std::sin(angle);
         return radius*std::cos(angle);
     }
-private:
-    /** A uniform deviate in (0, 1) from 53 bits of two output words. */
+    /** The next uniform deviate in (0, 1), from 53 bits of two output words. */
     double uniform() {
         uint64_t high = word(), low = word();
         uint64_t bits = ((high << 32) | low) >> 11;
         return (bits + 0.5)*0x1.0p-53;
     }
+private:
     uint32_t word() {
         if (used == 4) {
             block = philox4x32(counter, key);

@@ -1,5 +1,6 @@
 #include "ReferenceRigidKernels.h"
 #include "internal/Splitting.h"
+#include "numerics/StochasticRescaling.h"
 #include "openmm/Context.h"
 #include "openmm/OpenMMException.h"
 #include "openmm/reference/ReferencePlatform.h"
@@ -39,7 +40,9 @@ vector<Vec3>& extractForces(ContextImpl& context) {
 // ---- what both kernels share ----
 
 template <class Kernel>
-void ReferenceRigidBodyKernel<Kernel>::initializeBodies(ContextImpl& context, const RigidBodyIntegratorBase& integrator) {
+void ReferenceRigidBodyKernel<Kernel>::initializeBodies(ContextImpl& context, const RigidBodyIntegratorBase& integrator, int chosenSeed) {
+    seed = (chosenSeed != 0 ? (uint64_t) (uint32_t) chosenSeed : ((uint64_t) random_device()() << 32) | random_device()());
+    randomCounter = 0;
     const System& system = context.getSystem();
     bodies.reset(new RigidBodySystem(system, integrator.getExplicitBodies(), integrator.hasExplicitBodies()));
     dynamics.reset(new RigidBodyDynamics(*bodies));
@@ -80,13 +83,37 @@ void ReferenceRigidBodyKernel<Kernel>::computeKineticEnergies(ContextImpl& conte
     dynamics->computeKineticEnergies(extractVelocities(context), translational, rotational);
 }
 
+template <class Kernel>
+void ReferenceRigidBodyKernel<Kernel>::createCheckpoint(ContextImpl& context, ostream& stream) const {
+    stream.write((const char*) &seed, sizeof(seed));
+    stream.write((const char*) &randomCounter, sizeof(randomCounter));
+}
+
+template <class Kernel>
+void ReferenceRigidBodyKernel<Kernel>::loadCheckpoint(ContextImpl& context, istream& stream) {
+    // The integrator's data end the checkpoint: a RigidBodyIntegrator checkpoint from before the
+    // thermostat ends here, and means "no random numbers drawn".
+    if (stream.peek() == char_traits<char>::eof()) {
+        stream.clear();
+        return;
+    }
+    uint64_t savedSeed, savedCounter;
+    stream.read((char*) &savedSeed, sizeof(savedSeed));
+    stream.read((char*) &savedCounter, sizeof(savedCounter));
+    if (!stream)
+        throw OpenMMException("the checkpoint ends within the state of the rigid-body integrator's random numbers");
+    seed = savedSeed;
+    randomCounter = savedCounter;
+}
+
 template class ReferenceRigidBodyKernel<IntegrateRigidBodyStepKernel>;
 template class ReferenceRigidBodyKernel<IntegrateRigidBodyLangevinStepKernel>;
 
 // ---- RigidBodyIntegrator ----
 
 void ReferenceIntegrateRigidBodyStepKernel::initialize(ContextImpl& context, const RigidBodyIntegrator& integrator) {
-    initializeBodies(context, integrator);
+    initializeBodies(context, integrator, integrator.getRandomNumberSeed());
+    thermostatWork = 0.0;
 }
 
 void ReferenceIntegrateRigidBodyStepKernel::execute(ContextImpl& context, const RigidBodyIntegrator& integrator) {
@@ -103,17 +130,43 @@ void ReferenceIntegrateRigidBodyStepKernel::execute(ContextImpl& context, const 
         context.calcForcesAndEnergy(true, false, integrator.getIntegrationForceGroups());
     }
     dynamics->closingKick(positions, velocities, forces, scheme.kicks[scheme.numDrifts]*dt, tolerance);
+    if (integrator.hasThermostat()) {
+        // Bussi, Donadio and Parrinello (2007): one global factor for every momentum, from the exact
+        // solution over this step of the stochastic equation for the kinetic energy.
+        double translational, rotational, newKinetic;
+        dynamics->computeKineticEnergies(velocities, translational, rotational);
+        const int dof = bodies->getNumDegreesOfFreedom();
+        NormalStream random(seed, 0, randomCounter++);
+        double alpha = stochasticRescalingFactor(translational + rotational, 0.5*dof*BOLTZ*integrator.getThermostatTemperature(),
+                                                 dof, exp(-dt/integrator.getThermostatCollisionTime()), random, newKinetic);
+        dynamics->scaleVelocities(velocities, alpha);
+        thermostatWork += newKinetic - (translational + rotational);
+    }
     finishStep(context, dt);
+}
+
+void ReferenceIntegrateRigidBodyStepKernel::createCheckpoint(ContextImpl& context, ostream& stream) const {
+    ReferenceRigidBodyKernel<IntegrateRigidBodyStepKernel>::createCheckpoint(context, stream);
+    stream.write((const char*) &thermostatWork, sizeof(thermostatWork));
+}
+
+void ReferenceIntegrateRigidBodyStepKernel::loadCheckpoint(ContextImpl& context, istream& stream) {
+    if (stream.peek() == char_traits<char>::eof()) {
+        stream.clear();
+        return;  // written before the thermostat (see the base class)
+    }
+    ReferenceRigidBodyKernel<IntegrateRigidBodyStepKernel>::loadCheckpoint(context, stream);
+    double savedWork;
+    stream.read((char*) &savedWork, sizeof(savedWork));
+    if (!stream)
+        throw OpenMMException("RigidBodyIntegrator: the checkpoint ends within the thermostat's state");
+    thermostatWork = savedWork;
 }
 
 // ---- RigidBodyLangevinIntegrator ----
 
 void ReferenceIntegrateRigidBodyLangevinStepKernel::initialize(ContextImpl& context, const RigidBodyLangevinIntegrator& integrator) {
-    initializeBodies(context, integrator);
-    // As OpenMM's integrators do: seed 0 asks for a seed that differs from Context to Context.
-    int chosen = integrator.getRandomNumberSeed();
-    seed = (chosen != 0 ? (uint64_t) (uint32_t) chosen : ((uint64_t) random_device()() << 32) | random_device()());
-    randomCounter = 0;
+    initializeBodies(context, integrator, integrator.getRandomNumberSeed());
 }
 
 void ReferenceIntegrateRigidBodyLangevinStepKernel::execute(ContextImpl& context, const RigidBodyLangevinIntegrator& integrator) {
@@ -135,21 +188,6 @@ void ReferenceIntegrateRigidBodyLangevinStepKernel::execute(ContextImpl& context
     context.calcForcesAndEnergy(true, false, integrator.getIntegrationForceGroups());
     dynamics->closingKick(positions, velocities, forces, 0.5*dt, tolerance);
     finishStep(context, dt);
-}
-
-void ReferenceIntegrateRigidBodyLangevinStepKernel::createCheckpoint(ContextImpl& context, ostream& stream) const {
-    stream.write((const char*) &seed, sizeof(seed));
-    stream.write((const char*) &randomCounter, sizeof(randomCounter));
-}
-
-void ReferenceIntegrateRigidBodyLangevinStepKernel::loadCheckpoint(ContextImpl& context, istream& stream) {
-    uint64_t savedSeed, savedCounter;
-    stream.read((char*) &savedSeed, sizeof(savedSeed));
-    stream.read((char*) &savedCounter, sizeof(savedCounter));
-    if (!stream)
-        throw OpenMMException("RigidBodyLangevinIntegrator: the checkpoint ends before the state of the random numbers");
-    seed = savedSeed;
-    randomCounter = savedCounter;
 }
 
 } // namespace OpenMMRigid

@@ -1,34 +1,44 @@
 /* -------------------------------------------------------------------------- *
  *                               OpenMM-Rigid                                 *
  * -------------------------------------------------------------------------- *
- * Tests of RigidBodyLangevinIntegrator, shared by every platform: each       *
- * platform's Test<Platform>RigidBodyLangevinIntegrator.cpp includes this     *
- * file and calls runMain() with runLangevinTests.                            *
+ * Tests of constant temperature, shared by every platform: the               *
+ * RigidBodyLangevinIntegrator and RigidBodyIntegrator's stochastic velocity  *
+ * rescaling thermostat. Each platform's Test<Platform>RigidBodyThermostats   *
+ * .cpp includes this file and calls runMain() with runThermostatTests.       *
  *                                                                            *
  * Every check compares against something known:                              *
  * - Philox4x32-10 against the known-answer vectors of Random123;            *
- * - free bodies of every kind and free atoms (no forces) sample the         *
- *   canonical momenta exactly: the kinetic energy of each kind of degree of *
- *   freedom has the mean and variance of a Gamma distribution with shape    *
- *   dof/2 and scale kT (5 standard errors);                                 *
- * - particles in a harmonic trap at omega dt = 1: BAOAB samples positions   *
- *   exactly, <x^2> = kT/k, and its on-step velocities have                  *
+ * - Langevin: free bodies of every kind and free atoms (no forces) sample   *
+ *   the canonical momenta exactly: the kinetic energy of each kind of       *
+ *   degree of freedom has the mean and variance of a Gamma distribution    *
+ *   with shape dof/2 and scale kT (5 standard errors), with either rotation *
+ *   method;                                                                 *
+ * - Langevin, particles in a harmonic trap at omega dt = 1: BAOAB samples   *
+ *   positions exactly, <x^2> = kT/k, and its on-step velocities have        *
  *   <v^2> = (kT/m)(1 - (omega dt)^2/4) (5 standard errors), for single-     *
  *   particle bodies and free particles alike;                               *
- * - at T = 0 without forces the kinetic energy decays exactly as c^(2n);    *
- * - friction 0 is the constant-energy step: independent of the seed bit for *
- *   bit, and the trajectory of RigidBodyIntegrator (Verlet) to rounding;     *
- * - the same seed gives the same trajectory (bit for bit; on CPU with 1 or  *
- *   2 threads), another seed or seed 0 another; a checkpoint continues the  *
- *   random sequence exactly;                                                *
+ * - Langevin at T = 0 without forces: the kinetic energy decays exactly as  *
+ *   c^(2n);                                                                 *
+ * - Langevin with friction 0 is the constant-energy step: independent of    *
+ *   the seed bit for bit, and the trajectory of RigidBodyIntegrator         *
+ *   (Verlet) to rounding;                                                   *
+ * - thermostat (Bussi): the total kinetic energy of free bodies is Gamma     *
+ *   distributed; at T = 0 it decays as c^n; total energy minus the          *
+ *   thermostat's work is conserved like the energy of the constant-energy   *
+ *   integrator while the work is large; removed, the step is the            *
+ *   constant-energy one bit for bit;                                        *
+ * - both: the same seed gives the same trajectory (bit for bit; on CPU with *
+ *   1 or 2 threads), another seed or seed 0 another; a checkpoint continues *
+ *   the random sequence (and the thermostat's work) exactly;                *
  * - constraints among free particles and body shapes hold under the noise;  *
- * - bad temperatures and frictions raise OpenMMException naming the value,  *
- *   leaving the integrator and its Context usable.                          *
+ * - bad temperatures, frictions and collision times raise OpenMMException   *
+ *   naming the value, leaving the integrator and its Context usable.        *
  * -------------------------------------------------------------------------- */
 
 #include "TestRigidBodyIntegrator.h"
 #include "RigidBodyLangevinIntegrator.h"
 #include "numerics/Philox.h"
+#include "numerics/StochasticRescaling.h"
 #include "openmm/CustomExternalForce.h"
 
 namespace RigidBodyIntegratorTests {
@@ -410,9 +420,218 @@ void testBadTemperatureAndFriction(Platform& platform) {
 }
 
 // ------------------------------------------------------------------------------------------------
+// RigidBodyIntegrator's thermostat (stochastic velocity rescaling)
+// ------------------------------------------------------------------------------------------------
 
-/** Run every Langevin test on platform; print each failure and return the number of failures. */
-int runLangevinTests(Platform& platform) {
+Run startThermostat(const Scene& scene, Platform& platform, double temperature, double collisionTime, double dt, int seed,
+                    const std::map<string, string>& properties = platformProperties) {
+    Run run;
+    run.integrator.reset(new RigidBodyIntegrator(dt, scene.bodies));
+    run.integrator->setThermostat(temperature, collisionTime);
+    run.integrator->setRandomNumberSeed(seed);
+    run.context.reset(new Context(*scene.system, *run.integrator, platform, properties));
+    run.context->setPositions(scene.positions);
+    run.context->setVelocities(scene.velocities);
+    return run;
+}
+
+/**
+ * Free bodies of every kind and two free atoms, no forces: the free motion keeps the kinetic energy
+ * and the rescaling samples it from the canonical distribution of N_f = getNumDegreesOfFreedom()
+ * degrees of freedom, Gamma(N_f/2, kT), exactly. (Without forces nothing exchanges energy between
+ * the bodies, so only the total is canonical.) dt/tau = 0.5; samples 6 steps apart correlate by
+ * exp(-3) = 0.05.
+ */
+void testThermostatCanonicalKineticEnergy(Platform& platform) {
+    Scene scene = makeCluster(5, 4, 4, 4, false);
+    const double temperature = 300, kT = boltzmann*temperature, dt = 0.002;
+    Run run = startThermostat(scene, platform, temperature, 2*dt, dt, 31);
+    const int dof = run.integrator->getNumDegreesOfFreedom();
+    run.integrator->step(20);
+    vector<double> energies;
+    for (int s = 0; s < 2000; s++) {
+        run.integrator->step(6);
+        energies.push_back(run.context->getState(State::Energy).getKineticEnergy());
+    }
+    double mean, meanError, variance, varianceError;
+    sampleMoments(energies, mean, meanError, variance, varianceError);
+    double expectedMean = 0.5*dof*kT, expectedVariance = 0.5*dof*kT*kT;
+    string report = message("thermostat, free bodies (", dof, " dof): kinetic energy ", mean, " +- ", meanError,
+                            " kJ/mol (expected ", expectedMean, "), variance ", variance, " +- ", varianceError, " (expected ",
+                            expectedVariance, ")");
+    std::cout << report << std::endl;
+    check(fabs(mean - expectedMean) < 5*meanError, report);
+    check(fabs(variance - expectedVariance) < 5*varianceError, report);
+}
+
+/**
+ * The kinetic energy alone, iterated through eq. (A7) with c = 0.5: its stationary distribution is
+ * Gamma(N_f/2, kT) (mean N_f kT/2, variance N_f (kT)^2/2), for N_f = 3 (chi-squared deviates as sums
+ * of squares) and N_f = 200 (Marsaglia-Tsang). Successive values correlate by c, so the standard
+ * errors are those of independent samples times sqrt((1 + c)/(1 - c)) (and for the variance the
+ * square of that factor, (1 + c^2)/(1 - c^2), is used, slightly generous).
+ */
+void testStochasticRescalingRecurrence() {
+    const double kT = 2.5, c = 0.5;
+    for (int dof : {3, 200}) {
+        NormalStream random(77, dof, 0);
+        double kinetic = 0.5*dof*kT, newKinetic;
+        vector<double> samples;
+        for (int i = 0; i < 200000; i++) {
+            stochasticRescalingFactor(kinetic, 0.5*dof*kT, dof, c, random, newKinetic);
+            kinetic = newKinetic;
+            samples.push_back(kinetic);
+        }
+        double mean, meanError, variance, varianceError;
+        sampleMoments(samples, mean, meanError, variance, varianceError);
+        meanError *= sqrt((1 + c)/(1 - c));
+        varianceError *= sqrt((1 + c*c)/(1 - c*c))*sqrt((1 + c)/(1 - c));
+        string report = message("eq. (A7) iterated, ", dof, " dof: mean ", mean, " +- ", meanError, " (expected ", 0.5*dof*kT,
+                                "), variance ", variance, " +- ", varianceError, " (expected ", 0.5*dof*kT*kT, ")");
+        std::cout << report << std::endl;
+        check(fabs(mean - 0.5*dof*kT) < 5*meanError, report);
+        check(fabs(variance - 0.5*dof*kT*kT) < 5*varianceError, report);
+    }
+    // The chi-squared deviates themselves: mean n, variance 2n.
+    for (int n : {7, 32, 33, 150}) {
+        NormalStream random(5, n, 1);
+        vector<double> samples;
+        for (int i = 0; i < 100000; i++)
+            samples.push_back(chiSquaredDeviate(n, random));
+        double mean, meanError, variance, varianceError;
+        sampleMoments(samples, mean, meanError, variance, varianceError);
+        string report = message("chi-squared deviates, n = ", n, ": mean ", mean, " +- ", meanError, ", variance ", variance,
+                                " +- ", varianceError);
+        check(fabs(mean - n) < 5*meanError && fabs(variance - 2*n) < 5*varianceError, report);
+    }
+}
+
+/** At temperature 0 every step scales the kinetic energy by c = exp(-dt/tau) exactly (no forces). */
+void testThermostatDampsAtZeroTemperature(Platform& platform) {
+    Scene scene = makeCluster(3, 3, 3, 3, false);
+    const double dt = 0.002, tau = 0.05;
+    Run run = startThermostat(scene, platform, 0.0, tau, dt, 1);
+    double initial = 0;
+    for (size_t i = 0; i < scene.masses.size(); i++)
+        initial += 0.5*scene.masses[i]*scene.velocities[i].dot(scene.velocities[i]);
+    const int steps = 40;
+    run.integrator->step(steps);
+    double kinetic = run.context->getState(State::Energy).getKineticEnergy(), expected = initial*exp(-steps*dt/tau);
+    check(fabs(kinetic/expected - 1) < 1e-10, message("thermostat at T = 0: kinetic energy ", kinetic, ", expected ", expected));
+    ASSERT_EQUAL_TOL(expected - initial, run.integrator->getThermostatWork(), 1e-10);
+}
+
+/**
+ * Bussi's effective energy, total energy minus the thermostat's work, is conserved as the energy is
+ * by the constant-energy integrator: the interacting cluster starts at 300 K and is thermostatted
+ * at 150 K with tau = 0.02 ps, so the work is large (many times the energy error), and the largest
+ * |H~ - H~(0)| over 0.2 ps at 1 fs stays within twice the energy error of RigidBodyIntegrator
+ * without a thermostat from the same start (Verlet; measured 0.3 times, the cooled cluster moving
+ * more slowly) and falls by about 4 (second order: 3 to 5) at 0.5 fs.
+ */
+void testThermostatEffectiveEnergy(Platform& platform) {
+    Scene scene = makeCluster(7, 3, 3, 2, true);
+    double deviations[2], work = 0;
+    for (int k = 0; k < 2; k++) {
+        const double dt = 0.001/(1 << k);
+        Run run = startThermostat(scene, platform, 150.0, 0.02, dt, 5);
+        const int steps = (int) round(0.2/dt);
+        vector<double> effective;
+        for (int i = 0; i <= steps; i += steps/40) {
+            if (i > 0)
+                run.integrator->step(steps/40);
+            effective.push_back(totalEnergy(*run.context) - run.integrator->getThermostatWork());
+        }
+        deviations[k] = maxDeviation(effective);
+        work = run.integrator->getThermostatWork();
+    }
+    Run verlet = startRigid(scene, platform, 0.001, RigidBodyIntegrator::Exact);
+    vector<double> times, energies;
+    recordEnergies(*verlet.context, *verlet.integrator, 200, 5, times, energies);
+    double verletDeviation = maxDeviation(energies), ratio = deviations[0]/deviations[1];
+    string report = message("thermostat: max |H~ - H~(0)| ", deviations[0], " kJ/mol at 1 fs, ", deviations[1],
+                            " at 0.5 fs (ratio ", ratio, "); work ", work, " kJ/mol; constant energy at 1 fs: ", verletDeviation);
+    std::cout << report << std::endl;
+    check(fabs(work) > 100*deviations[0], report);
+    check(deviations[0] < 2*verletDeviation, report);
+    check(ratio > 3 && ratio < 5, report);
+}
+
+void testThermostatSettings(Platform& platform) {
+    Scene scene = makeCluster(11, 3, 3, 2, true);
+    // Removed before the first step: the constant-energy trajectory, bit for bit.
+    Run plain = startRigid(scene, platform, 0.002, RigidBodyIntegrator::Exact);
+    Run removed = startThermostat(scene, platform, 300.0, 0.1, 0.002, 3);
+    check(removed.integrator->hasThermostat(), "hasThermostat");
+    removed.integrator->removeThermostat();
+    check(!removed.integrator->hasThermostat() && removed.integrator->getThermostatTemperature() == 300.0, "removeThermostat");
+    plain.integrator->step(30);
+    removed.integrator->step(30);
+    check(maxDifference(positionsOf(*plain.context), positionsOf(*removed.context)) == 0.0, "a removed thermostat changes the steps");
+    check(removed.integrator->getThermostatWork() == 0.0, "no work without a thermostat");
+    // Seeds.
+    auto positionsAfter = [&](int seed, const std::map<string, string>& properties) {
+        Run run = startThermostat(scene, platform, 300.0, 0.01, 0.002, seed, properties);
+        run.integrator->step(50);
+        return positionsOf(*run.context);
+    };
+    vector<Vec3> a = positionsAfter(5, platformProperties);
+    check(maxDifference(a, positionsAfter(5, platformProperties)) == 0.0, "thermostat: the same seed gave other positions");
+    check(maxDifference(a, positionsAfter(6, platformProperties)) > 1e-6, "thermostat: seeds 5 and 6 gave the same positions");
+    check(maxDifference(positionsAfter(0, platformProperties), positionsAfter(0, platformProperties)) > 1e-6,
+          "thermostat: two Contexts with seed 0 gave the same positions");
+    if (platform.getName() == "CPU") {
+        Scene many = makeCluster(13, 4, 4, 5, false);
+        vector<Vec3> byThreads[2];
+        for (int k = 0; k < 2; k++) {
+            std::map<string, string> properties = platformProperties;
+            properties["Threads"] = (k == 0 ? "1" : "2");
+            Run run = startThermostat(many, platform, 300.0, 0.01, 0.002, 8, properties);
+            run.integrator->step(30);
+            byThreads[k] = positionsOf(*run.context);
+        }
+        check(maxDifference(byThreads[0], byThreads[1]) == 0.0, "thermostat: 1 and 2 threads gave different trajectories");
+    }
+    // A checkpoint continues the random numbers and keeps the work.
+    Run run = startThermostat(scene, platform, 200.0, 0.01, 0.002, 3);
+    run.integrator->step(20);
+    std::stringstream checkpoint;
+    run.context->createCheckpoint(checkpoint);
+    double work = run.integrator->getThermostatWork();
+    run.integrator->step(30);
+    vector<Vec3> straight = positionsOf(*run.context);
+    double straightWork = run.integrator->getThermostatWork();
+    Run other = startThermostat(scene, platform, 200.0, 0.01, 0.002, 4);
+    other.context->loadCheckpoint(checkpoint);
+    ASSERT_EQUAL_TOL(work, other.integrator->getThermostatWork(), 1e-15);
+    other.integrator->step(30);
+    double resumed = maxDifference(straight, positionsOf(*other.context));
+    check(resumed < 1e-10, message("thermostat: a checkpoint does not continue the trajectory: ", resumed, " nm apart"));
+    ASSERT_EQUAL_TOL(straightWork, other.integrator->getThermostatWork(), 1e-9);
+    // Bad values: an exception naming them, the settings unchanged, the Context usable.
+    const double inf = std::numeric_limits<double>::infinity(), nan = std::numeric_limits<double>::quiet_NaN();
+    vector<std::pair<double, double> > bad = {{-1.0, 0.1}, {nan, 0.1}, {inf, 0.1}, {300.0, 0.0}, {300.0, -0.1}, {300.0, nan}, {300.0, inf}};
+    for (auto& values : bad) {
+        bool threw = false;
+        try {
+            run.integrator->setThermostat(values.first, values.second);
+        }
+        catch (const OpenMMException& e) {
+            threw = string(e.what()).find("thermostat") != string::npos && string(e.what()).find("collision time") != string::npos;
+        }
+        check(threw, message("setThermostat(", values.first, ", ", values.second, ") raised no clear exception"));
+    }
+    check(run.integrator->getThermostatTemperature() == 200.0 && run.integrator->getThermostatCollisionTime() == 0.01,
+          "bad thermostat values leave the settings unchanged");
+    run.integrator->step(5);
+    for (const Vec3& r : positionsOf(*run.context))
+        check(std::isfinite(r.dot(r)), "the Context works after bad thermostat values");
+}
+
+// ------------------------------------------------------------------------------------------------
+
+/** Run every constant-temperature test on platform; print each failure and return the number of failures. */
+int runThermostatTests(Platform& platform) {
     vector<std::pair<string, std::function<void()> > > tests = {
         {"Philox4x32-10 known answers and normal deviates", []() { testPhiloxKnownAnswers(); }},
         {"canonical kinetic energy of free bodies (Exact)", [&]() { testCanonicalKineticEnergy(platform, RigidBodyIntegratorBase::Exact); }},
@@ -424,6 +643,11 @@ int runLangevinTests(Platform& platform) {
         {"checkpoint continues the random numbers", [&]() { testCheckpoint(platform); }},
         {"constraints and rigidity under noise", [&]() { testConstraintsUnderNoise(platform); }},
         {"bad temperature and friction", [&]() { testBadTemperatureAndFriction(platform); }},
+        {"thermostat: eq. (A7) and chi-squared deviates", []() { testStochasticRescalingRecurrence(); }},
+        {"thermostat: canonical kinetic energy of free bodies", [&]() { testThermostatCanonicalKineticEnergy(platform); }},
+        {"thermostat: damped at zero temperature", [&]() { testThermostatDampsAtZeroTemperature(platform); }},
+        {"thermostat: effective energy conserved", [&]() { testThermostatEffectiveEnergy(platform); }},
+        {"thermostat: removal, seeds, threads, checkpoints, bad values", [&]() { testThermostatSettings(platform); }},
     };
     return runTestList(tests);
 }

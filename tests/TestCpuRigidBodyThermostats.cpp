@@ -1,13 +1,13 @@
 /* -------------------------------------------------------------------------- *
  *                               OpenMM-Rigid                                 *
  * -------------------------------------------------------------------------- *
- * The tests of RigidBodyLangevinIntegrator                                   *
- * (TestRigidBodyLangevinIntegrator.h) on the CPU platform, loaded from the   *
- * OpenMM installation's plugin folder (OPENMM_PLUGIN_DIR, passed by CMake),  *
- * with deterministic forces.                                                 *
+ * The constant-temperature tests (RigidBodyLangevinIntegrator and           *
+ * RigidBodyIntegrator's thermostat, TestRigidBodyThermostats.h) on the CPU  *
+ * platform, loaded from the OpenMM installation's plugin folder              *
+ * (OPENMM_PLUGIN_DIR, passed by CMake), with deterministic forces.           *
  * -------------------------------------------------------------------------- */
 
-#include "TestRigidBodyLangevinIntegrator.h"
+#include "TestRigidBodyThermostats.h"
 
 int main() {
     return RigidBodyIntegratorTests::runMain([]() -> OpenMM::Platform& {
@@ -15,5 +15,5 @@ int main() {
         registerKernelFactories();  // after the CPU platform exists, so that it gets the kernels too
         RigidBodyIntegratorTests::platformProperties["DeterministicForces"] = "true";
         return OpenMM::Platform::getPlatformByName("CPU");
-    }, RigidBodyIntegratorTests::runLangevinTests);
+    }, RigidBodyIntegratorTests::runThermostatTests);
 }

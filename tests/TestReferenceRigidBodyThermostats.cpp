@@ -1,15 +1,16 @@
 /* -------------------------------------------------------------------------- *
  *                               OpenMM-Rigid                                 *
  * -------------------------------------------------------------------------- *
- * The tests of RigidBodyLangevinIntegrator                                   *
- * (TestRigidBodyLangevinIntegrator.h) on the Reference platform.             *
+ * The constant-temperature tests (RigidBodyLangevinIntegrator and           *
+ * RigidBodyIntegrator's thermostat, TestRigidBodyThermostats.h) on the       *
+ * Reference platform.                                                        *
  * -------------------------------------------------------------------------- */
 
-#include "TestRigidBodyLangevinIntegrator.h"
+#include "TestRigidBodyThermostats.h"
 
 int main() {
     return RigidBodyIntegratorTests::runMain([]() -> OpenMM::Platform& {
         registerKernelFactories();  // libOpenMMRigidReference: the kernels for Reference and CPU
         return OpenMM::Platform::getPlatformByName("Reference");
-    }, RigidBodyIntegratorTests::runLangevinTests);
+    }, RigidBodyIntegratorTests::runThermostatTests);
 }
