@@ -13,6 +13,8 @@ RigidBodyIntegrator
     The integrator, an ``openmm.Integrator`` for ``openmm.Context`` and ``openmm.app.Simulation``.
 RigidBodyLangevinIntegrator
     The same for constant temperature: a Langevin (BAOAB) integrator with the exact free drift.
+RigidBodyIntegratorBase
+    Their common base (bodies, rotation method, kinetic energies, degrees of freedom).
 RigidStateDataReporter
     An ``openmm.app.StateDataReporter`` that takes its degrees of freedom from the integrator.
 deserializeIntegrator

@@ -45,9 +45,10 @@ velocities, then their velocity constraints.
 
 Bodies, rotation methods and every query (``getNumBodies``, ``getBodyKind``,
 ``getNumDegreesOfFreedom``, ``computeSystemTemperature``, ``getTranslationalKineticEnergy``, ...)
-are those of ``RigidBodyIntegrator``. Velocities are on-step; for stiff modes (the librations of
-water) the on-step velocities of BAOAB read a kinetic temperature slightly below the bath's, by a
-factor of about 1 - (omega dt)^2/4, while configurations are sampled accurately.
+are those of ``RigidBodyIntegrator``. Velocities are on-step; for stiff modes the on-step
+velocities of BAOAB read a kinetic temperature below the bath's, by the factor 1 - (omega dt)^2/4
+for a harmonic mode of angular frequency omega, while configurations are sampled accurately: the
+rotational temperature of rigid water reads about 1 % low at 2 fs and 4 % low at 4 fs.
 
 Parameters
 ----------

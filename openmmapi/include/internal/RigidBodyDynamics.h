@@ -19,9 +19,11 @@ class ThreadPool;
 namespace OpenMMRigid {
 
 /**
- * The physics of a RigidBodyIntegrator step on plain arrays of positions, velocities and forces
- * (every platform's kernel extracts its arrays and calls this class). A step is a sequence of
- * stages (internal/Splitting.h) with a force evaluation, which the caller performs, between them:
+ * The physics of a step of RigidBodyIntegrator or RigidBodyLangevinIntegrator on plain arrays of
+ * positions, velocities and forces (every platform's kernel extracts its arrays and calls this
+ * class). A step is a sequence of stages (internal/Splitting.h; for the Langevin integrator
+ * kickAndDrift, thermalize, drift, closingKick) with a force evaluation, which the caller performs,
+ * after each drift:
  *
  *   kickAndDrift(a, b):  for each body, a kick V += F a / M, L += tau a (lab frame) followed by the
  *                        free drift R += V b and the rotation of the attitude for a time b (exact
@@ -30,7 +32,6 @@ namespace OpenMMRigid {
  *   closingKick(a):      the last kick of the step, after which the rigid velocities
  *                        v = V + omega x (r - R) are written to the body particles; free particles:
  *                        kick and velocity constraints.
- *
  *   drift(b):            the free drift alone (the second half drift of a Langevin step).
  *   thermalize(c, kT):   the exact Ornstein-Uhlenbeck step of the momenta (see below).
  *   scaleVelocities(a):  every momentum times a (a thermostat's rescaling, after the closing kick).
