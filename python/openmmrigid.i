@@ -1,6 +1,7 @@
 // The SWIG module openmmrigid._openmmrigid (proxy: openmmrigid/openmmrigid.py). Users import the
-// package openmmrigid, whose Python classes (FreeRotor, special) call into this module; RigidBodyIntegrator is
-// the proxy class defined here (swig/rigidbodyintegrator.i), re-exported by the package.
+// package openmmrigid, whose Python classes (FreeRotor, special) call into this module; RigidBodyIntegrator and
+// RigidBodyLangevinIntegrator are the proxy classes defined here (swig/rigidbodyintegrator.i,
+// swig/rigidbodylangevinintegrator.i), re-exported by the package.
 %module(package="openmmrigid") openmmrigid
 
 %{
@@ -45,3 +46,15 @@ static void raiseOpenMMException(const std::string& message) {
 %include "swig/special.i"
 %include "swig/freerotor.i"
 %include "swig/rigidbodyintegrator.i"
+%include "swig/rigidbodylangevinintegrator.i"
+
+// The helpers behind pickle, copy and XmlSerializer (defined in swig/rigidbodyintegrator.i, renamed
+// to private names there), declared once both integrator classes are known.
+namespace OpenMMRigid {
+namespace Python {
+RigidBodyIntegratorBase* deserializeRigidIntegrator(const std::string& xml);
+RigidBodyIntegratorBase* cloneRigidIntegrator(const RigidBodyIntegratorBase& integrator);
+RigidBodyIntegrator* asRigidBodyIntegrator(OpenMM::Integrator* integrator);
+RigidBodyLangevinIntegrator* asRigidBodyLangevinIntegrator(OpenMM::Integrator* integrator);
+} // namespace Python
+} // namespace OpenMMRigid

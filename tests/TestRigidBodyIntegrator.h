@@ -1142,6 +1142,8 @@ void testBadInput(Platform& platform) {
 
 // ------------------------------------------------------------------------------------------------
 
+int runTestList(const vector<std::pair<string, std::function<void()> > >& tests);
+
 /** Run every test on platform; print each failure and return the number of failures. */
 int runPlatformTests(Platform& platform) {
     const RigidBodyIntegrator::RotationMethod exact = RigidBodyIntegrator::Exact, noSquish = RigidBodyIntegrator::NoSquish;
@@ -1167,6 +1169,11 @@ int runPlatformTests(Platform& platform) {
         }
         add("mixed system", [&platform, splitting]() { testMixedSystem(platform, splitting); });
     }
+    return runTestList(tests);
+}
+
+/** Run each test, print "ok" with its time or "FAIL" with the message, and return the number of failures. */
+int runTestList(const vector<std::pair<string, std::function<void()> > >& tests) {
     int failures = 0;
     for (auto& test : tests) {
         try {
@@ -1185,11 +1192,13 @@ int runPlatformTests(Platform& platform) {
 
 /**
  * The main() of a platform's test file: set the platform up (load it, register our kernels), run
- * every test on it, and report the way ctest and OpenMM's own tests do.
+ * every test on it (runPlatformTests, or another set such as TestRigidBodyThermostats.h's),
+ * and report the way ctest and OpenMM's own tests do.
  */
-inline int runMain(const std::function<Platform&()>& setUpPlatform) {
+inline int runMain(const std::function<Platform&()>& setUpPlatform,
+                   const std::function<int(Platform&)>& runTests = runPlatformTests) {
     try {
-        int failures = runPlatformTests(setUpPlatform());
+        int failures = runTests(setUpPlatform());
         if (failures > 0) {
             std::cout << failures << " test(s) failed" << std::endl;
             return 1;

@@ -1,17 +1,12 @@
 #ifndef OPENMMRIGID_RIGIDBODYINTEGRATOR_H_
 #define OPENMMRIGID_RIGIDBODYINTEGRATOR_H_
 
-#include "openmm/Integrator.h"
-#include "openmm/Kernel.h"
+#include "RigidBodyIntegratorBase.h"
 #include "internal/windowsExportRigid.h"
-#include <iosfwd>
 #include <string>
 #include <vector>
 
 namespace OpenMMRigid {
-
-class IntegrateRigidBodyStepKernel;
-struct RigidBody;
 
 /**
  * This is an Integrator for systems of rigid molecules. Each rigid body moves by a symplectic,
@@ -31,6 +26,12 @@ struct RigidBody;
  * Mryglod and Folk, Comput. Phys. Commun. 146, 188 (2002) (Omelyan4). Bodies and free particles
  * follow the same sequence.
  *
+ * Without more, the integrator conserves the energy. setThermostat() adds the global stochastic
+ * velocity rescaling of Bussi, Donadio and Parrinello (2007) after every step, for constant
+ * temperature; RigidBodyLangevinIntegrator is the Langevin alternative. The questions one may ask
+ * about the bodies (kinds, moments, kinetic energies, degrees of freedom) are those of
+ * RigidBodyIntegratorBase.
+ *
  * The bodies are either found in the System when the Context is created (every cluster of three or
  * more particles that its constraints hold rigid: the rigid waters of TIP3P, SPC/E, TIP4P-Ew and
  * TIP5P, or any other rigid constraint cluster), or given explicitly as lists of particle indices.
@@ -47,15 +48,8 @@ struct RigidBody;
  * the integrator runs: each body is re-fitted by a mass-weighted least-squares rigid fit, and its
  * particle velocities are replaced by the rigid motion with the same linear and angular momentum.
  */
-class OPENMM_EXPORT_RIGID RigidBodyIntegrator : public OpenMM::Integrator {
+class OPENMM_EXPORT_RIGID RigidBodyIntegrator : public RigidBodyIntegratorBase {
 public:
-    /** How the orientation of each body is advanced during the free drift. */
-    enum RotationMethod {
-        /** The exact torque-free motion (van Zon and Schofield, 2007). */
-        Exact = 0,
-        /** The symplectic NO_SQUISH splitting of the free rotation (Miller et al., 2002). */
-        NoSquish = 1
-    };
     /**
      * Create a RigidBodyIntegrator whose bodies are the rigid constraint clusters of the System.
      *
@@ -98,16 +92,6 @@ public:
          */
         Omelyan4 = 3
     };
-    /** Get the method used to advance the orientation of each body. */
-    RotationMethod getRotationMethod() const {
-        return rotationMethod;
-    }
-    /**
-     * Set the method used to advance the orientation of each body.
-     *
-     * @throws OpenMMException if the value is not a RotationMethod
-     */
-    void setRotationMethod(RotationMethod method);
     /** Get the splitting: the sequence of kicks and drifts that makes one step. */
     Splitting getSplitting() const {
         return splitting;
@@ -124,90 +108,64 @@ public:
      * step starts with, so this is the number of drifts in a step.
      */
     int getNumForceEvaluations() const;
-    /** Get whether the bodies were given explicitly (rather than found from the System's constraints). */
-    bool hasExplicitBodies() const {
-        return explicitBodies;
+    /**
+     * Add a thermostat: after every step the velocities of all bodies (linear and angular) and free
+     * particles are scaled by one common factor, which samples the kinetic energy from the exact
+     * solution of the stochastic velocity rescaling of G. Bussi, D. Donadio and M. Parrinello, J.
+     * Chem. Phys. 126, 014101 (2007), eq. (A7), over one step, with the degrees of freedom of
+     * getNumDegreesOfFreedom(). The system then samples the canonical ensemble, and the total energy
+     * minus getThermostatWork() (Bussi's effective energy) is conserved as the total energy is without
+     * a thermostat. Replaces any thermostat set before; takes effect at the next step.
+     *
+     * @param temperature    the temperature of the heat bath, measured in Kelvin (0 damps the motion)
+     * @param collisionTime  tau, the relaxation time of the kinetic energy, measured in ps
+     * @throws OpenMMException if the temperature is negative or not finite, or the collision time not positive and finite
+     */
+    void setThermostat(double temperature, double collisionTime);
+    /** Remove the thermostat: the integrator conserves the energy again (the default). */
+    void removeThermostat() {
+        thermostat = false;
     }
-    /** Get the explicit bodies passed to the constructor (empty when they are found from the System). */
-    const std::vector<std::vector<int> >& getExplicitBodies() const {
-        return bodies;
+    /** Get whether a thermostat is set. */
+    bool hasThermostat() const {
+        return thermostat;
+    }
+    /** Get the temperature of the thermostat, in Kelvin (0 if none was ever set). */
+    double getThermostatTemperature() const {
+        return thermostatTemperature;
+    }
+    /** Get the collision time tau of the thermostat, in ps (0 if none was ever set). */
+    double getThermostatCollisionTime() const {
+        return thermostatCollisionTime;
     }
     /**
-     * Get the number of rigid bodies. Only available once the integrator is bound to a Context.
+     * Get the kinetic energy the thermostat has added to the system since the Context was created
+     * (negative where it removed energy), measured in kJ/mol. The total energy minus this is
+     * Bussi's effective energy, conserved up to the integration error. Saved in checkpoints. Only
+     * available once the integrator is bound to a Context.
      */
-    int getNumBodies() const;
+    double getThermostatWork();
+    /** Get the random number seed of the thermostat. See setRandomNumberSeed() for details. */
+    int getRandomNumberSeed() const {
+        return randomNumberSeed;
+    }
     /**
-     * Get the particle indices of a rigid body. Only available once the integrator is bound to a Context.
-     *
-     * @param index  the index of the body, from 0 to getNumBodies() - 1
+     * Set the random number seed of the thermostat, read when a Context is created. With the same
+     * seed the Reference and CPU platforms give the same trajectory, with any number of threads;
+     * different seeds give different ones. 0 (the default) picks a new seed for every Context.
      */
-    std::vector<int> getBodyParticles(int index) const;
-    /**
-     * Get the kind of a rigid body: "point" (one particle: translation only), "linear" (two rotational
-     * degrees of freedom), "spherical", "symmetric" or "asymmetric" (by its principal moments).
-     * Only available once the integrator is bound to a Context; for an explicit body, once positions
-     * have been set.
-     *
-     * @param index  the index of the body, from 0 to getNumBodies() - 1
-     */
-    std::string getBodyKind(int index) const;
-    /**
-     * Get the principal moments of inertia of a rigid body, in amu nm^2, in ascending order.
-     *
-     * @param index  the index of the body, from 0 to getNumBodies() - 1
-     */
-    std::vector<double> getBodyMoments(int index) const;
-    /**
-     * Get the kinetic energy of the translation of the bodies' centres of mass plus that of the free
-     * particles, measured in kJ/mol. Only available once the integrator is bound to a Context.
-     */
-    double getTranslationalKineticEnergy();
-    /**
-     * Get the kinetic energy of the rotation of the bodies about their centres of mass, measured in kJ/mol.
-     * Only available once the integrator is bound to a Context.
-     */
-    double getRotationalKineticEnergy();
-    /**
-     * Get the number of degrees of freedom of the system as this integrator moves it: 3 per free
-     * particle, less one per constraint among free particles, plus 3 translational and 0 (point),
-     * 2 (linear) or 3 rotational ones per body, less 3 if the System has a CMMotionRemover. With it,
-     * the temperature is 2 KE / (dof k_B). Only available once the integrator is bound to a Context.
-     */
-    int getNumDegreesOfFreedom() const;
-    /**
-     * Get the instantaneous temperature of the system, 2 KE / (dof k_B) with dof from
-     * getNumDegreesOfFreedom(), measured in K. openmm.app.StateDataReporter uses this method when an
-     * integrator has it, so its temperature is right for explicit bodies too. Only available once
-     * the integrator is bound to a Context.
-     */
-    double computeSystemTemperature();
-    /**
-     * Advance a simulation through time by taking a series of time steps.
-     *
-     * @param steps   the number of time steps to take
-     */
-    void step(int steps);
+    void setRandomNumberSeed(int seed) {
+        randomNumberSeed = seed;
+    }
 protected:
-    void initialize(OpenMM::ContextImpl& context);
-    void cleanup();
     std::vector<std::string> getKernelNames();
-    void stateChanged(OpenMM::State::DataType changed);
-    double computeKineticEnergy();
-    bool kineticEnergyRequiresForce() const {
-        return false;
-    }
-    void createCheckpoint(std::ostream& stream) const;
-    void loadCheckpoint(std::istream& stream);
+    void initializeKernel(OpenMM::ContextImpl& context);
+    void executeKernel(OpenMM::ContextImpl& context);
 private:
-    const IntegrateRigidBodyStepKernel& getKernel() const;
-    IntegrateRigidBodyStepKernel& getKernel();
-    const RigidBody& getShapedBody(int index) const;
-    std::vector<std::vector<int> > bodies;
-    bool explicitBodies;
-    RotationMethod rotationMethod;
     Splitting splitting;
-    bool bound, forcesAreValid, needsProjection;
-    OpenMM::Kernel kernel;
+    bool thermostat;
+    double thermostatTemperature, thermostatCollisionTime;
+    int randomNumberSeed;
 };
 
 } // namespace OpenMMRigid

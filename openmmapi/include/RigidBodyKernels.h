@@ -2,9 +2,11 @@
 #define OPENMMRIGID_RIGIDBODYKERNELS_H_
 
 #include "RigidBodyIntegrator.h"
+#include "RigidBodyLangevinIntegrator.h"
 #include "openmm/KernelImpl.h"
 #include "openmm/System.h"
 #include "openmm/internal/ContextImpl.h"
+#include <iosfwd>
 #include <string>
 #include <vector>
 
@@ -13,33 +15,13 @@ namespace OpenMMRigid {
 class RigidBodySystem;
 
 /**
- * This kernel is invoked by RigidBodyIntegrator to take one time step, and to answer questions about
- * the bodies and their kinetic energy.
+ * What the kernels of every rigid-body integrator answer: the bodies, their projection onto rigid
+ * motion, and the kinetic energy. (Not a kernel by itself: each integrator has its own, below.)
  */
-class IntegrateRigidBodyStepKernel : public OpenMM::KernelImpl {
+class RigidBodyStepKernel : public OpenMM::KernelImpl {
 public:
-    static std::string Name() {
-        return "IntegrateRigidBodyStep";
+    RigidBodyStepKernel(std::string name, const OpenMM::Platform& platform) : OpenMM::KernelImpl(name, platform) {
     }
-    IntegrateRigidBodyStepKernel(std::string name, const OpenMM::Platform& platform) : OpenMM::KernelImpl(name, platform) {
-    }
-    /**
-     * Initialize the kernel: find the bodies and check the System against them.
-     *
-     * @param context     the context the integrator is bound to
-     * @param integrator  the RigidBodyIntegrator this kernel is used for
-     */
-    virtual void initialize(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) = 0;
-    /**
-     * Execute the kernel: one step of the integrator's splitting (internal/Splitting.h), with the
-     * virtual sites placed and the forces evaluated after every drift. On entry the context holds
-     * the forces at the current positions, and the bodies agree with them (see project()); on exit
-     * it holds the forces at the new positions.
-     *
-     * @param context     the context in which to execute this kernel
-     * @param integrator  the RigidBodyIntegrator this kernel is being used for
-     */
-    virtual void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) = 0;
     /**
      * Re-fit the bodies to the context's positions, project its velocities onto rigid motion, and
      * place the virtual sites. Called when positions changed from outside the integrator.
@@ -48,7 +30,7 @@ public:
     /**
      * Compute the kinetic energy, sum m v^2 / 2 over the massive particles.
      */
-    virtual double computeKineticEnergy(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) = 0;
+    virtual double computeKineticEnergy(OpenMM::ContextImpl& context) = 0;
     /**
      * Split the kinetic energy of the bodies and free particles into translation (centres of mass and
      * free particles) and rotation (about the centres of mass).
@@ -56,6 +38,77 @@ public:
     virtual void computeKineticEnergies(OpenMM::ContextImpl& context, double& translational, double& rotational) = 0;
     /** The bodies, as found when the kernel was initialized. */
     virtual const RigidBodySystem& getBodies() const = 0;
+    /** Write the kernel's own state (the random numbers and what they produced) to a checkpoint. */
+    virtual void createCheckpoint(OpenMM::ContextImpl& context, std::ostream& stream) const = 0;
+    /**
+     * Read the state written by createCheckpoint(). A stream that ends here (a checkpoint written
+     * before the kernel had a state to save) leaves the state as it is.
+     */
+    virtual void loadCheckpoint(OpenMM::ContextImpl& context, std::istream& stream) = 0;
+};
+
+/**
+ * This kernel is invoked by RigidBodyIntegrator to take one time step, and to answer questions about
+ * the bodies and their kinetic energy.
+ */
+class IntegrateRigidBodyStepKernel : public RigidBodyStepKernel {
+public:
+    static std::string Name() {
+        return "IntegrateRigidBodyStep";
+    }
+    IntegrateRigidBodyStepKernel(std::string name, const OpenMM::Platform& platform) : RigidBodyStepKernel(name, platform) {
+    }
+    /**
+     * Initialize the kernel: find the bodies, check the System against them and seed the random
+     * numbers of the thermostat (a seed of 0 picks one at random).
+     *
+     * @param context     the context the integrator is bound to
+     * @param integrator  the RigidBodyIntegrator this kernel is used for
+     */
+    virtual void initialize(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) = 0;
+    /**
+     * Execute the kernel: one step of the integrator's splitting (internal/Splitting.h), with the
+     * virtual sites placed and the forces evaluated after every drift, then, if the integrator has
+     * a thermostat, the stochastic rescaling of the velocities. On entry the context holds the forces
+     * at the current positions, and the bodies agree with them (see project()); on exit it holds the
+     * forces at the new positions.
+     *
+     * @param context     the context in which to execute this kernel
+     * @param integrator  the RigidBodyIntegrator this kernel is being used for
+     */
+    virtual void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) = 0;
+    /** The kinetic energy the thermostat has added since the kernel was created (negative if it removed energy). */
+    virtual double getThermostatWork() const = 0;
+};
+
+/**
+ * This kernel is invoked by RigidBodyLangevinIntegrator to take one time step, and to answer
+ * questions about the bodies and their kinetic energy.
+ */
+class IntegrateRigidBodyLangevinStepKernel : public RigidBodyStepKernel {
+public:
+    static std::string Name() {
+        return "IntegrateRigidBodyLangevinStep";
+    }
+    IntegrateRigidBodyLangevinStepKernel(std::string name, const OpenMM::Platform& platform) : RigidBodyStepKernel(name, platform) {
+    }
+    /**
+     * Initialize the kernel: find the bodies, check the System against them and seed the random
+     * numbers (a seed of 0 picks one at random).
+     *
+     * @param context     the context the integrator is bound to
+     * @param integrator  the RigidBodyLangevinIntegrator this kernel is used for
+     */
+    virtual void initialize(OpenMM::ContextImpl& context, const RigidBodyLangevinIntegrator& integrator) = 0;
+    /**
+     * Execute the kernel: half kick, half drift, Ornstein-Uhlenbeck step, half drift, force
+     * evaluation, half kick. On entry the context holds the forces at the current positions, and
+     * the bodies agree with them (see project()); on exit it holds the forces at the new positions.
+     *
+     * @param context     the context in which to execute this kernel
+     * @param integrator  the RigidBodyLangevinIntegrator this kernel is being used for
+     */
+    virtual void execute(OpenMM::ContextImpl& context, const RigidBodyLangevinIntegrator& integrator) = 0;
 };
 
 } // namespace OpenMMRigid

@@ -1,6 +1,7 @@
 #include "internal/RigidBodyDynamics.h"
 #include "numerics/FreeRotor.h"
 #include "numerics/NoSquish.h"
+#include "numerics/Philox.h"
 #include "numerics/SymmetricEigen.h"
 #include "openmm/OpenMMException.h"
 #include "openmm/internal/ThreadPool.h"
@@ -191,14 +192,14 @@ void RigidBodyDynamics::fitBody(int index, vector<Vec3>& positions, vector<Vec3>
         velocities[body.particles[i]] = toVec3(velocity) + toVec3(cross(omega, arms[i]));
 }
 
-void RigidBodyDynamics::rotate(const RigidBody& body, BodyState& state, double dt, RigidBodyIntegrator::RotationMethod method) const {
+void RigidBodyDynamics::rotate(const RigidBody& body, BodyState& state, double dt, RigidBodyIntegratorBase::RotationMethod method) const {
     Vector3 bodyMomentum = multiply(state.attitude, state.angularMomentum);
     if (body.kind == RigidBody::Point)
         return;
     // A linear body's free motion is a uniform rotation about L, which both methods take exactly:
     // NO_SQUISH's turns about the perpendicular axes would move part of L onto the molecular axis,
     // where the body can carry none.
-    if (method == RigidBodyIntegrator::NoSquish && body.kind != RigidBody::Linear)
+    if (method == RigidBodyIntegratorBase::NoSquish && body.kind != RigidBody::Linear)
         noSquishRotate(body.moments, dt, state.attitude, bodyMomentum);
     else {
         // The attitude is kept orthonormal here and the momenta were checked finite in kickAndDrift().
@@ -246,7 +247,7 @@ void RigidBodyDynamics::forceAndTorque(const RigidBody& body, const BodyState& s
     }
 }
 
-void RigidBodyDynamics::driftBody(int b, double h, RigidBodyIntegrator::RotationMethod method, vector<Vec3>& positions) {
+void RigidBodyDynamics::driftBody(int b, double h, RigidBodyIntegratorBase::RotationMethod method, vector<Vec3>& positions) {
     const RigidBody& body = system.getBodies()[b];
     BodyState& state = states[b];
     for (int k = 0; k < 3; k++)
@@ -257,29 +258,43 @@ void RigidBodyDynamics::driftBody(int b, double h, RigidBodyIntegrator::Rotation
 }
 
 void RigidBodyDynamics::kickAndDrift(vector<Vec3>& positions, vector<Vec3>& velocities, const vector<Vec3>& forces,
-                                     double kick, double drift, RigidBodyIntegrator::RotationMethod method,
+                                     double kick, double drift, RigidBodyIntegratorBase::RotationMethod method,
                                      double constraintTolerance) {
+    advance(positions, velocities, &forces, kick, drift, method, constraintTolerance);
+}
+
+void RigidBodyDynamics::drift(vector<Vec3>& positions, vector<Vec3>& velocities, double drift,
+                              RigidBodyIntegratorBase::RotationMethod method, double constraintTolerance) {
+    advance(positions, velocities, NULL, 0.0, drift, method, constraintTolerance);
+}
+
+void RigidBodyDynamics::advance(vector<Vec3>& positions, vector<Vec3>& velocities, const vector<Vec3>* forces,
+                                double kick, double drift, RigidBodyIntegratorBase::RotationMethod method,
+                                double constraintTolerance) {
     const vector<RigidBody>& bodies = system.getBodies();
     forEachBody([&](int b) {
         const RigidBody& body = bodies[b];
         BodyState& state = states[b];
         refreshMomenta(b, positions, velocities);
-        Vec3 force, torque;
-        forceAndTorque(body, state, positions, forces, force, torque);
-        Vec3 velocity = toVec3(state.velocity) + force*(kick/body.mass);
-        Vec3 angularMomentum = toVec3(state.angularMomentum) + torque*kick;
-        if (!(isfinite(velocity.dot(velocity)) && isfinite(angularMomentum.dot(angularMomentum))))
-            throw OpenMMException("RigidBodyIntegrator: body " + to_string(b) + " has a non-finite velocity, force or "
-                    "torque; the simulation is unstable (try a smaller step size)");
-        state.velocity = toVector(velocity);
-        state.angularMomentum = toVector(angularMomentum);
+        if (forces != NULL) {
+            Vec3 force, torque;
+            forceAndTorque(body, state, positions, *forces, force, torque);
+            Vec3 velocity = toVec3(state.velocity) + force*(kick/body.mass);
+            Vec3 angularMomentum = toVec3(state.angularMomentum) + torque*kick;
+            if (!(isfinite(velocity.dot(velocity)) && isfinite(angularMomentum.dot(angularMomentum))))
+                throw OpenMMException("RigidBodyIntegrator: body " + to_string(b) + " has a non-finite velocity, force or "
+                        "torque; the simulation is unstable (try a smaller step size)");
+            state.velocity = toVector(velocity);
+            state.angularMomentum = toVector(angularMomentum);
+        }
         driftBody(b, drift, method, positions);
     });
     const vector<int>& free = system.getFreeParticles();
     if (constraints)
         previousPositions = positions;
     for (int p : free) {
-        velocities[p] += forces[p]*(kick*inverseMasses[p]);
+        if (forces != NULL)
+            velocities[p] += (*forces)[p]*(kick*inverseMasses[p]);
         positions[p] += velocities[p]*drift;
     }
     if (constraints) {
@@ -287,6 +302,64 @@ void RigidBodyDynamics::kickAndDrift(vector<Vec3>& positions, vector<Vec3>& velo
         for (int p : free)
             velocities[p] = (positions[p] - previousPositions[p])/drift;
     }
+}
+
+void RigidBodyDynamics::thermalize(vector<Vec3>& positions, vector<Vec3>& velocities, double c, double kT,
+                                   uint64_t seed, uint64_t step, double constraintTolerance) {
+    // The exact Ornstein-Uhlenbeck flow: the mean decays by c, and the variance goes from its
+    // starting value s to c^2 s + (1 - c^2) m kT, so the canonical variance m kT stays fixed.
+    const double noise = sqrt((1.0 - c*c)*kT);
+    const vector<RigidBody>& bodies = system.getBodies();
+    forEachBody([&](int b) {
+        const RigidBody& body = bodies[b];
+        BodyState& state = states[b];
+        NormalStream normal(seed, b, step);
+        const double velocityNoise = noise/sqrt(body.mass);
+        for (int k = 0; k < 3; k++)
+            state.velocity[k] = c*state.velocity[k] + velocityNoise*normal.next();
+        // In the principal frame the rotational kinetic energy is sum L_k^2 / (2 I_k): each component
+        // is an independent Gaussian of variance I_k kT (none along the axis of a linear body, I_0 = 0).
+        // The deviates are drawn in the lab frame and turned into the body frame: a rotated isotropic
+        // Gaussian is one, and the noise in the lab, A^T diag(sqrt(I_k)) A xi, is then the square
+        // root of the lab inertia tensor applied to xi, whatever principal axes (signs, order of
+        // equal moments, turn of a linear body about its axis) the body's shape was given. So a
+        // trajectory does not depend on how or when the body was fitted (a checkpoint loaded into
+        // a new Context continues it).
+        Vector3 xi;
+        for (int k = 0; k < 3; k++)
+            xi[k] = normal.next();
+        if (body.kind != RigidBody::Point) {
+            Vector3 bodyMomentum = multiply(state.attitude, state.angularMomentum), bodyXi = multiply(state.attitude, xi);
+            for (int k = 0; k < 3; k++)
+                bodyMomentum[k] = c*bodyMomentum[k] + noise*sqrt(body.moments[k])*bodyXi[k];
+            state.angularMomentum = multiplyTransposed(state.attitude, bodyMomentum);
+        }
+    });
+    const vector<int>& free = system.getFreeParticles();
+    const uint32_t firstStream = bodies.size();
+    for (size_t i = 0; i < free.size(); i++) {
+        int p = free[i];
+        NormalStream normal(seed, firstStream + i, step);
+        const double velocityNoise = noise*sqrt(inverseMasses[p]);
+        for (int k = 0; k < 3; k++)
+            velocities[p][k] = c*velocities[p][k] + velocityNoise*normal.next();
+    }
+    if (constraints)
+        constraints->applyToVelocities(positions, velocities, inverseMasses, constraintTolerance);
+}
+
+void RigidBodyDynamics::scaleVelocities(vector<Vec3>& velocities, double alpha) {
+    for (BodyState& state : states)
+        for (int k = 0; k < 3; k++) {
+            state.velocity[k] *= alpha;
+            state.angularMomentum[k] *= alpha;
+        }
+    for (const RigidBody& body : system.getBodies())
+        for (int p : body.particles)
+            velocities[p] *= alpha;
+    for (int p : system.getFreeParticles())
+        velocities[p] *= alpha;
+    writtenVelocities = velocities;
 }
 
 void RigidBodyDynamics::closingKick(vector<Vec3>& positions, vector<Vec3>& velocities, const vector<Vec3>& forces,

@@ -1,11 +1,10 @@
 #include "RigidBodyIntegrator.h"
 #include "RigidBodyKernels.h"
-#include "internal/RigidBodySystem.h"
 #include "internal/Splitting.h"
-#include "openmm/Context.h"
 #include "openmm/OpenMMException.h"
 #include "openmm/internal/ContextImpl.h"
-#include "openmm/reference/SimTKOpenMMRealType.h"
+#include <cmath>
+#include <sstream>
 #include <string>
 
 using namespace OpenMM;
@@ -13,28 +12,13 @@ using namespace std;
 
 namespace OpenMMRigid {
 
-RigidBodyIntegrator::RigidBodyIntegrator(double stepSize) : explicitBodies(false), rotationMethod(Exact),
-        splitting(Verlet), bound(false), forcesAreValid(false), needsProjection(true) {
-    setStepSize(stepSize);
-    setConstraintTolerance(1e-5);
+RigidBodyIntegrator::RigidBodyIntegrator(double stepSize) : RigidBodyIntegratorBase("RigidBodyIntegrator", stepSize),
+        splitting(Verlet), thermostat(false), thermostatTemperature(0.0), thermostatCollisionTime(0.0), randomNumberSeed(0) {
 }
 
-RigidBodyIntegrator::RigidBodyIntegrator(double stepSize, const vector<vector<int> >& bodies) : bodies(bodies),
-        explicitBodies(true), rotationMethod(Exact), splitting(Verlet), bound(false), forcesAreValid(false),
-        needsProjection(true) {
-    setStepSize(stepSize);
-    setConstraintTolerance(1e-5);
-    for (size_t b = 0; b < bodies.size(); b++)
-        for (int p : bodies[b])
-            if (p < 0)
-                throw OpenMMException("RigidBodyIntegrator: body " + to_string(b) + " lists the negative particle index " + to_string(p));
-}
-
-void RigidBodyIntegrator::setRotationMethod(RotationMethod method) {
-    if (method != Exact && method != NoSquish)
-        throw OpenMMException("RigidBodyIntegrator: unknown rotation method " + to_string((int) method) +
-                "; use RigidBodyIntegrator.Exact (0) or RigidBodyIntegrator.NoSquish (1)");
-    rotationMethod = method;
+RigidBodyIntegrator::RigidBodyIntegrator(double stepSize, const vector<vector<int> >& bodies) :
+        RigidBodyIntegratorBase("RigidBodyIntegrator", stepSize, bodies), splitting(Verlet), thermostat(false),
+        thermostatTemperature(0.0), thermostatCollisionTime(0.0), randomNumberSeed(0) {
 }
 
 void RigidBodyIntegrator::setSplitting(Splitting value) {
@@ -46,92 +30,22 @@ int RigidBodyIntegrator::getNumForceEvaluations() const {
     return splittingScheme(splitting).numDrifts;
 }
 
-const IntegrateRigidBodyStepKernel& RigidBodyIntegrator::getKernel() const {
-    if (!bound)
-        throw OpenMMException("RigidBodyIntegrator: this information is available once the integrator is bound to a Context");
-    return kernel.getAs<const IntegrateRigidBodyStepKernel>();
-}
-
-IntegrateRigidBodyStepKernel& RigidBodyIntegrator::getKernel() {
-    if (!bound)
-        throw OpenMMException("RigidBodyIntegrator: this information is available once the integrator is bound to a Context");
-    return kernel.getAs<IntegrateRigidBodyStepKernel>();
-}
-
-int RigidBodyIntegrator::getNumBodies() const {
-    return getKernel().getBodies().getBodies().size();
-}
-
-vector<int> RigidBodyIntegrator::getBodyParticles(int index) const {
-    const vector<RigidBody>& all = getKernel().getBodies().getBodies();
-    if (index < 0 || index >= (int) all.size())
-        throw OpenMMException("RigidBodyIntegrator: body index " + to_string(index) + " out of range (there are " +
-                to_string(all.size()) + " bodies)");
-    return all[index].particles;
-}
-
-const RigidBody& RigidBodyIntegrator::getShapedBody(int index) const {
-    vector<int> particles = getBodyParticles(index);  // checks the index
-    const RigidBody& body = getKernel().getBodies().getBodies()[index];
-    if (!body.shapeKnown) {
-        // An explicit body takes its shape from the positions; fit now rather than at the next step.
-        RigidBodyIntegrator& self = const_cast<RigidBodyIntegrator&>(*this);
-        self.getKernel().project(*context);
-        self.needsProjection = false;
-        self.forcesAreValid = false;
+void RigidBodyIntegrator::setThermostat(double temperature, double collisionTime) {
+    if (!(isfinite(temperature) && temperature >= 0.0) || !(isfinite(collisionTime) && collisionTime > 0.0)) {
+        stringstream text;
+        text.precision(17);
+        text << "RigidBodyIntegrator: the thermostat needs a finite temperature >= 0 (in K) and a finite collision time > 0 "
+                "(in ps); got temperature " << temperature << ", collision time " << collisionTime;
+        throw OpenMMException(text.str());
     }
-    return body;
+    thermostat = true;
+    thermostatTemperature = temperature;
+    thermostatCollisionTime = collisionTime;
 }
 
-string RigidBodyIntegrator::getBodyKind(int index) const {
-    return RigidBody::kindName(getShapedBody(index).kind);
-}
-
-vector<double> RigidBodyIntegrator::getBodyMoments(int index) const {
-    const Vector3& moments = getShapedBody(index).moments;
-    return vector<double>(moments.begin(), moments.end());
-}
-
-int RigidBodyIntegrator::getNumDegreesOfFreedom() const {
-    for (int b = 0; b < getNumBodies(); b++)
-        getShapedBody(b);
-    return getKernel().getBodies().getNumDegreesOfFreedom();
-}
-
-double RigidBodyIntegrator::computeSystemTemperature() {
-    int dof = getNumDegreesOfFreedom();
-    if (dof <= 0)
-        return 0.0;
-    return 2.0*computeKineticEnergy()/(dof*BOLTZ);
-}
-
-double RigidBodyIntegrator::getTranslationalKineticEnergy() {
-    double translational, rotational;
-    getKernel().computeKineticEnergies(*context, translational, rotational);
-    return translational;
-}
-
-double RigidBodyIntegrator::getRotationalKineticEnergy() {
-    double translational, rotational;
-    getKernel().computeKineticEnergies(*context, translational, rotational);
-    return rotational;
-}
-
-void RigidBodyIntegrator::initialize(ContextImpl& contextRef) {
-    if (owner != NULL && &contextRef.getOwner() != owner)
-        throw OpenMMException("This Integrator is already bound to a context");
-    context = &contextRef;
-    owner = &contextRef.getOwner();
-    kernel = context->getPlatform().createKernel(IntegrateRigidBodyStepKernel::Name(), contextRef);
-    kernel.getAs<IntegrateRigidBodyStepKernel>().initialize(contextRef, *this);
-    bound = true;
-    forcesAreValid = false;
-    needsProjection = true;
-}
-
-void RigidBodyIntegrator::cleanup() {
-    bound = false;
-    kernel = Kernel();
+double RigidBodyIntegrator::getThermostatWork() {
+    getKernel();  // throws unless bound
+    return kernel.getAs<IntegrateRigidBodyStepKernel>().getThermostatWork();
 }
 
 vector<string> RigidBodyIntegrator::getKernelNames() {
@@ -140,48 +54,12 @@ vector<string> RigidBodyIntegrator::getKernelNames() {
     return names;
 }
 
-void RigidBodyIntegrator::stateChanged(State::DataType changed) {
-    if (changed == State::Positions || changed == State::Velocities) {
-        needsProjection = true;
-        forcesAreValid = false;
-    }
-    else if (changed == State::Parameters)
-        forcesAreValid = false;
+void RigidBodyIntegrator::initializeKernel(ContextImpl& context) {
+    kernel.getAs<IntegrateRigidBodyStepKernel>().initialize(context, *this);
 }
 
-double RigidBodyIntegrator::computeKineticEnergy() {
-    return getKernel().computeKineticEnergy(*context, *this);
-}
-
-void RigidBodyIntegrator::createCheckpoint(ostream& stream) const {
-    // The bodies' state is a function of the positions and velocities the checkpoint already holds.
-}
-
-void RigidBodyIntegrator::loadCheckpoint(istream& stream) {
-    needsProjection = true;
-    forcesAreValid = false;
-}
-
-void RigidBodyIntegrator::step(int steps) {
-    if (!bound)
-        throw OpenMMException("This Integrator is not bound to a context!");
-    IntegrateRigidBodyStepKernel& stepKernel = getKernel();
-    for (int i = 0; i < steps; ++i) {
-        if (context->updateContextState()) {
-            // A Force (e.g. a barostat) moved the particles: re-fit the bodies to them.
-            forcesAreValid = false;
-            needsProjection = true;
-        }
-        if (needsProjection) {
-            stepKernel.project(*context);
-            needsProjection = false;
-            forcesAreValid = false;
-        }
-        if (!forcesAreValid)
-            context->calcForcesAndEnergy(true, false, getIntegrationForceGroups());
-        stepKernel.execute(*context, *this);
-        forcesAreValid = true;
-    }
+void RigidBodyIntegrator::executeKernel(ContextImpl& context) {
+    kernel.getAs<IntegrateRigidBodyStepKernel>().execute(context, *this);
 }
 
 } // namespace OpenMMRigid

@@ -11,10 +11,14 @@ Contents
 --------
 RigidBodyIntegrator
     The integrator, an ``openmm.Integrator`` for ``openmm.Context`` and ``openmm.app.Simulation``.
+RigidBodyLangevinIntegrator
+    The same for constant temperature: a Langevin (BAOAB) integrator with the exact free drift.
+RigidBodyIntegratorBase
+    Their common base (bodies, rotation method, kinetic energies, degrees of freedom).
 RigidStateDataReporter
     An ``openmm.app.StateDataReporter`` that takes its degrees of freedom from the integrator.
 deserializeIntegrator
-    A RigidBodyIntegrator from XML (``openmm.XmlSerializer.deserialize`` does the same).
+    A RigidBodyIntegrator or RigidBodyLangevinIntegrator from XML (``openmm.XmlSerializer.deserialize`` does the same).
 FreeRotor
     The exact torque-free motion of a single rigid body.
 special
@@ -25,7 +29,7 @@ from importlib.metadata import PackageNotFoundError, version as _distributionVer
 
 from . import special
 from .freerotor import FreeRotor
-from .integrator import RigidBodyIntegrator, deserializeIntegrator
+from .integrator import RigidBodyIntegrator, RigidBodyIntegratorBase, RigidBodyLangevinIntegrator, deserializeIntegrator
 from .reporters import RigidStateDataReporter
 
 try:
@@ -33,5 +37,5 @@ try:
 except PackageNotFoundError:  # imported from a source tree that was never installed
     __version__ = "unknown"
 
-__all__ = ["RigidBodyIntegrator", "RigidStateDataReporter", "deserializeIntegrator", "FreeRotor", "special",
+__all__ = ["RigidBodyIntegrator", "RigidBodyLangevinIntegrator", "RigidBodyIntegratorBase", "RigidStateDataReporter", "deserializeIntegrator", "FreeRotor", "special",
            "__version__"]

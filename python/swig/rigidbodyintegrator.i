@@ -1,4 +1,6 @@
-// OpenMMRigid::RigidBodyIntegrator as a subclass of openmm.Integrator.
+// OpenMMRigid::RigidBodyIntegrator (and, in rigidbodylangevinintegrator.i, RigidBodyLangevinIntegrator)
+// as subclasses of openmm.Integrator, through their common base RigidBodyIntegratorBase, which holds
+// the bodies, the rotation method and the questions one asks about them.
 //
 // OpenMM's own classes come from the openmm wheel's swig/OpenMMSwigHeaders.i, imported (not
 // included): the proxy class derives from openmm.Integrator, and SWIG's shared type table (runtime
@@ -24,6 +26,7 @@
 #include "openmm/RPMDIntegrator.h"
 #include "openmm/RPMDMonteCarloBarostat.h"
 #include "RigidBodyIntegrator.h"
+#include "RigidBodyLangevinIntegrator.h"
 #include "openmm/serialization/XmlSerializer.h"
 #include <climits>
 #include <sstream>
@@ -110,26 +113,35 @@ PyObject* intListToPython(const std::vector<int>& values) {
 namespace OpenMMRigid {
 namespace Python {
 
-/** Deserialize XML written by XmlSerializer for a RigidBodyIntegrator; the caller owns the result. */
-RigidBodyIntegrator* deserializeRigidBodyIntegrator(const std::string& xml) {
+/**
+ * Deserialize XML written by XmlSerializer for a RigidBodyIntegrator or RigidBodyLangevinIntegrator;
+ * the caller owns the result (openmmrigid/integrator.py gives it its most derived class).
+ */
+RigidBodyIntegratorBase* deserializeRigidIntegrator(const std::string& xml) {
     std::istringstream stream(xml);
     OpenMM::Integrator* integrator = OpenMM::XmlSerializer::deserialize<OpenMM::Integrator>(stream);
-    RigidBodyIntegrator* rigid = dynamic_cast<RigidBodyIntegrator*>(integrator);
+    RigidBodyIntegratorBase* rigid = dynamic_cast<RigidBodyIntegratorBase*>(integrator);
     if (rigid == NULL) {
         delete integrator;
-        throw OpenMM::OpenMMException("deserializeIntegrator: the XML does not describe a RigidBodyIntegrator");
+        throw OpenMM::OpenMMException("deserializeIntegrator: the XML does not describe a RigidBodyIntegrator or "
+                                      "a RigidBodyLangevinIntegrator");
     }
     return rigid;
 }
 
 /** A copy of integrator with every setting, not bound to any Context; the caller owns it. */
-RigidBodyIntegrator* cloneRigidBodyIntegrator(const RigidBodyIntegrator& integrator) {
-    return dynamic_cast<RigidBodyIntegrator*>(OpenMM::XmlSerializer::clone<OpenMM::Integrator>(integrator));
+RigidBodyIntegratorBase* cloneRigidIntegrator(const RigidBodyIntegratorBase& integrator) {
+    return dynamic_cast<RigidBodyIntegratorBase*>(OpenMM::XmlSerializer::clone<OpenMM::Integrator>(integrator));
 }
 
 /** integrator as a RigidBodyIntegrator (not a copy), or NULL if it is another kind of Integrator. */
 RigidBodyIntegrator* asRigidBodyIntegrator(OpenMM::Integrator* integrator) {
     return dynamic_cast<RigidBodyIntegrator*>(integrator);
+}
+
+/** integrator as a RigidBodyLangevinIntegrator (not a copy), or NULL if it is another kind of Integrator. */
+RigidBodyLangevinIntegrator* asRigidBodyLangevinIntegrator(OpenMM::Integrator* integrator) {
+    return dynamic_cast<RigidBodyLangevinIntegrator*>(integrator);
 }
 
 } // namespace Python
@@ -139,8 +151,9 @@ RigidBodyIntegrator* asRigidBodyIntegrator(OpenMM::Integrator* integrator) {
 // ---- typemaps ----
 
 %typemap(typecheck, precedence=SWIG_TYPECHECK_POINTER) const std::vector<std::vector<int> >& bodies {
-    // Only one constructor takes a second argument: let anything through, so that the in typemap
-    // reports what is wrong with it (as openmm.OpenMMException) rather than the overload dispatcher.
+    // Only one constructor of each class takes bodies (the last argument): let anything through, so
+    // that the in typemap reports what is wrong with it (as openmm.OpenMMException) rather than the
+    // overload dispatcher.
     $1 = 1;
 }
 %typemap(in) const std::vector<std::vector<int> >& bodies (std::vector<std::vector<int> > converted) {
@@ -188,16 +201,31 @@ import openmm as _openmm_package
     if len(args) > 0 and _unit.is_quantity(args[0]):
         args[0] = args[0].value_in_unit(_unit.picosecond)
 %}
-%pythonappend OpenMMRigid::RigidBodyIntegrator::getTranslationalKineticEnergy %{
-    val = _unit.Quantity(val, _unit.kilojoule_per_mole)
+%pythonprepend OpenMMRigid::RigidBodyIntegrator::setThermostat %{
+    if _unit.is_quantity(temperature):
+        temperature = temperature.value_in_unit(_unit.kelvin)
+    if _unit.is_quantity(collisionTime):
+        collisionTime = collisionTime.value_in_unit(_unit.picosecond)
 %}
-%pythonappend OpenMMRigid::RigidBodyIntegrator::getRotationalKineticEnergy %{
-    val = _unit.Quantity(val, _unit.kilojoule_per_mole)
-%}
-%pythonappend OpenMMRigid::RigidBodyIntegrator::computeSystemTemperature %{
+%pythonappend OpenMMRigid::RigidBodyIntegrator::getThermostatTemperature %{
     val = _unit.Quantity(val, _unit.kelvin)
 %}
-%pythonappend OpenMMRigid::RigidBodyIntegrator::getBodyMoments %{
+%pythonappend OpenMMRigid::RigidBodyIntegrator::getThermostatCollisionTime %{
+    val = _unit.Quantity(val, _unit.picosecond)
+%}
+%pythonappend OpenMMRigid::RigidBodyIntegrator::getThermostatWork %{
+    val = _unit.Quantity(val, _unit.kilojoule_per_mole)
+%}
+%pythonappend OpenMMRigid::RigidBodyIntegratorBase::getTranslationalKineticEnergy %{
+    val = _unit.Quantity(val, _unit.kilojoule_per_mole)
+%}
+%pythonappend OpenMMRigid::RigidBodyIntegratorBase::getRotationalKineticEnergy %{
+    val = _unit.Quantity(val, _unit.kilojoule_per_mole)
+%}
+%pythonappend OpenMMRigid::RigidBodyIntegratorBase::computeSystemTemperature %{
+    val = _unit.Quantity(val, _unit.kelvin)
+%}
+%pythonappend OpenMMRigid::RigidBodyIntegratorBase::getBodyMoments %{
     val = _unit.Quantity(val, _unit.amu*_unit.nanometer**2)
 %}
 
@@ -221,6 +249,10 @@ and R. Folk, Phys. Rev. E 65, 056706 (2002); two force evaluations per step), ``
 (Yoshida's fourth-order triple jump, Phys. Lett. A 150, 262 (1990); three) or ``Omelyan4`` (the
 optimized fourth-order Forest-Ruth-like scheme of Omelyan, Mryglod and Folk, Comput. Phys. Commun.
 146, 188 (2002); four).
+
+Without more the integrator conserves the energy; ``setThermostat(temperature, collisionTime)``
+adds the stochastic velocity rescaling of Bussi, Donadio and Parrinello (2007) after every step for
+constant temperature (``RigidBodyLangevinIntegrator`` is the Langevin alternative).
 
 The bodies are either found in the System when the Context is created (every cluster of three or
 more particles that its constraints hold rigid, such as rigid water), or given explicitly as lists
@@ -257,8 +289,9 @@ Examples
 >>> integrator = RigidBodyIntegrator(0.002, [[0, 1, 2], [3, 4, 5, 6]])      # explicit bodies
 >>> integrator.setRotationMethod(RigidBodyIntegrator.NoSquish)
 >>> integrator.setSplitting(RigidBodyIntegrator.Omelyan2)                    # two forces per step
+>>> integrator.setThermostat(300*unit.kelvin, 0.1*unit.picosecond)          # constant temperature
 ";
-%feature("docstring") OpenMMRigid::RigidBodyIntegrator::getRotationMethod "
+%feature("docstring") OpenMMRigid::RigidBodyIntegratorBase::getRotationMethod "
 Get the method used to advance the orientation of each body.
 
 Returns
@@ -266,7 +299,7 @@ Returns
 int
     ``RigidBodyIntegrator.Exact`` (the default) or ``RigidBodyIntegrator.NoSquish``.
 ";
-%feature("docstring") OpenMMRigid::RigidBodyIntegrator::setRotationMethod "
+%feature("docstring") OpenMMRigid::RigidBodyIntegratorBase::setRotationMethod "
 Set the method used to advance the orientation of each body.
 
 Parameters
@@ -313,6 +346,82 @@ Raises
 openmm.OpenMMException
     If splitting is not one of these values.
 ";
+%feature("docstring") OpenMMRigid::RigidBodyIntegrator::setThermostat "
+Add a thermostat: global stochastic velocity rescaling after every step.
+
+After every step all momenta (the bodies' linear and angular ones and the free particles') are
+scaled by one common factor, which samples the kinetic energy from the exact solution over one step
+of the stochastic velocity rescaling of G. Bussi, D. Donadio and M. Parrinello, J. Chem. Phys. 126,
+014101 (2007), eq. (A7), with the degrees of freedom of ``getNumDegreesOfFreedom()``. The system
+then samples the canonical ensemble; the total energy minus ``getThermostatWork()`` (Bussi's
+effective energy) is conserved as the total energy is without a thermostat. Replaces any thermostat
+set before; takes effect at the next step.
+
+Parameters
+----------
+temperature : float or openmm.unit.Quantity
+    The temperature of the heat bath, in K if a plain number (0 damps the motion).
+collisionTime : float or openmm.unit.Quantity
+    tau, the relaxation time of the kinetic energy, in ps if a plain number.
+
+Raises
+------
+openmm.OpenMMException
+    If the temperature is negative or not finite, or the collision time is not positive and finite.
+";
+%feature("docstring") OpenMMRigid::RigidBodyIntegrator::removeThermostat "
+Remove the thermostat: the integrator conserves the energy again (the default).
+";
+%feature("docstring") OpenMMRigid::RigidBodyIntegrator::hasThermostat "
+Get whether a thermostat is set.
+
+Returns
+-------
+bool
+";
+%feature("docstring") OpenMMRigid::RigidBodyIntegrator::getThermostatTemperature "
+Get the temperature of the thermostat (0 K if none was ever set).
+
+Returns
+-------
+openmm.unit.Quantity
+    The temperature, in K.
+";
+%feature("docstring") OpenMMRigid::RigidBodyIntegrator::getThermostatCollisionTime "
+Get the collision time tau of the thermostat (0 ps if none was ever set).
+
+Returns
+-------
+openmm.unit.Quantity
+    The collision time, in ps.
+";
+%feature("docstring") OpenMMRigid::RigidBodyIntegrator::getThermostatWork "
+Get the kinetic energy the thermostat has added since the Context was created (negative where it
+removed energy). The total energy minus this is Bussi's effective energy, conserved up to the
+integration error. Saved in checkpoints. Only available once the integrator is bound to a Context.
+
+Returns
+-------
+openmm.unit.Quantity
+    The energy, in kJ/mol.
+";
+%feature("docstring") OpenMMRigid::RigidBodyIntegrator::setRandomNumberSeed "
+Set the random number seed of the thermostat, read when a Context is created.
+
+With the same seed, the Reference and CPU platforms give the same trajectory, with any number of
+threads; different seeds give different ones. 0 (the default) picks a new seed for every Context.
+
+Parameters
+----------
+seed : int
+";
+%feature("docstring") OpenMMRigid::RigidBodyIntegrator::getRandomNumberSeed "
+Get the random number seed of the thermostat (0: a new one is chosen for every Context).
+
+Returns
+-------
+int
+";
 %feature("docstring") OpenMMRigid::RigidBodyIntegrator::getNumForceEvaluations "
 Get the number of force evaluations per step that the splitting takes: 1 (Verlet), 2 (Omelyan2),
 3 (Yoshida4) or 4 (Omelyan4).
@@ -321,14 +430,14 @@ Returns
 -------
 int
 ";
-%feature("docstring") OpenMMRigid::RigidBodyIntegrator::hasExplicitBodies "
+%feature("docstring") OpenMMRigid::RigidBodyIntegratorBase::hasExplicitBodies "
 Get whether the bodies were given explicitly rather than found from the System's constraints.
 
 Returns
 -------
 bool
 ";
-%feature("docstring") OpenMMRigid::RigidBodyIntegrator::getExplicitBodies "
+%feature("docstring") OpenMMRigid::RigidBodyIntegratorBase::getExplicitBodies "
 Get the explicit bodies passed to the constructor.
 
 Returns
@@ -336,14 +445,14 @@ Returns
 list of list of int
     The particle indices of each body; empty when the bodies are found from the System.
 ";
-%feature("docstring") OpenMMRigid::RigidBodyIntegrator::getNumBodies "
+%feature("docstring") OpenMMRigid::RigidBodyIntegratorBase::getNumBodies "
 Get the number of rigid bodies. Only available once the integrator is bound to a Context.
 
 Returns
 -------
 int
 ";
-%feature("docstring") OpenMMRigid::RigidBodyIntegrator::getBodyParticles "
+%feature("docstring") OpenMMRigid::RigidBodyIntegratorBase::getBodyParticles "
 Get the particle indices of a rigid body. Only available once the integrator is bound to a Context.
 
 Parameters
@@ -355,7 +464,7 @@ Returns
 -------
 list of int
 ";
-%feature("docstring") OpenMMRigid::RigidBodyIntegrator::getBodyKind "
+%feature("docstring") OpenMMRigid::RigidBodyIntegratorBase::getBodyKind "
 Get the kind of a rigid body. Only available once the integrator is bound to a Context (for an
 explicit body, once positions have been set).
 
@@ -370,7 +479,7 @@ str
     \"point\" (one particle: translation only), \"linear\" (two rotational degrees of freedom),
     \"spherical\", \"symmetric\" or \"asymmetric\" (by its principal moments).
 ";
-%feature("docstring") OpenMMRigid::RigidBodyIntegrator::getBodyMoments "
+%feature("docstring") OpenMMRigid::RigidBodyIntegratorBase::getBodyMoments "
 Get the principal moments of inertia of a rigid body, in ascending order.
 
 Parameters
@@ -383,7 +492,7 @@ Returns
 openmm.unit.Quantity
     A list of three moments, in amu nm^2.
 ";
-%feature("docstring") OpenMMRigid::RigidBodyIntegrator::getTranslationalKineticEnergy "
+%feature("docstring") OpenMMRigid::RigidBodyIntegratorBase::getTranslationalKineticEnergy "
 Get the kinetic energy of the translation of the bodies' centres of mass plus that of the free
 particles. Only available once the integrator is bound to a Context.
 
@@ -392,7 +501,7 @@ Returns
 openmm.unit.Quantity
     The energy, in kJ/mol.
 ";
-%feature("docstring") OpenMMRigid::RigidBodyIntegrator::getRotationalKineticEnergy "
+%feature("docstring") OpenMMRigid::RigidBodyIntegratorBase::getRotationalKineticEnergy "
 Get the kinetic energy of the rotation of the bodies about their centres of mass. Only available
 once the integrator is bound to a Context.
 
@@ -401,7 +510,7 @@ Returns
 openmm.unit.Quantity
     The energy, in kJ/mol.
 ";
-%feature("docstring") OpenMMRigid::RigidBodyIntegrator::getNumDegreesOfFreedom "
+%feature("docstring") OpenMMRigid::RigidBodyIntegratorBase::getNumDegreesOfFreedom "
 Get the number of degrees of freedom of the system as this integrator moves it. Only available
 once the integrator is bound to a Context.
 
@@ -413,7 +522,7 @@ Returns
 -------
 int
 ";
-%feature("docstring") OpenMMRigid::RigidBodyIntegrator::step "
+%feature("docstring") OpenMMRigid::RigidBodyIntegratorBase::step "
 Advance a simulation through time by taking a series of time steps.
 
 Parameters
@@ -422,36 +531,41 @@ steps : int
     The number of time steps to take.
 ";
 
-// ---- the class ----
+// ---- the classes ----
+
+%feature("docstring") OpenMMRigid::RigidBodyIntegratorBase "
+The base of RigidBodyIntegrator and RigidBodyLangevinIntegrator: the bodies, the rotation method of
+their free drift, and the questions one may ask about them (kinds, moments, kinetic energies,
+degrees of freedom, temperature). It cannot be created on its own.
+";
 
 #define OPENMM_EXPORT_RIGID
 // The helpers behind pickle, copy and XmlSerializer (openmmrigid/integrator.py); private names.
-%rename(_deserializeRigidBodyIntegrator) OpenMMRigid::Python::deserializeRigidBodyIntegrator;
-%rename(_cloneRigidBodyIntegrator) OpenMMRigid::Python::cloneRigidBodyIntegrator;
+%rename(_deserializeRigidIntegrator) OpenMMRigid::Python::deserializeRigidIntegrator;
+%rename(_cloneRigidIntegrator) OpenMMRigid::Python::cloneRigidIntegrator;
 %rename(_asRigidBodyIntegrator) OpenMMRigid::Python::asRigidBodyIntegrator;
-%newobject OpenMMRigid::Python::deserializeRigidBodyIntegrator;
-%newobject OpenMMRigid::Python::cloneRigidBodyIntegrator;
+%rename(_asRigidBodyLangevinIntegrator) OpenMMRigid::Python::asRigidBodyLangevinIntegrator;
+%newobject OpenMMRigid::Python::deserializeRigidIntegrator;
+%newobject OpenMMRigid::Python::cloneRigidIntegrator;
+%include "RigidBodyIntegratorBase.h"
 %include "RigidBodyIntegrator.h"
 
-namespace OpenMMRigid {
-namespace Python {
-RigidBodyIntegrator* deserializeRigidBodyIntegrator(const std::string& xml);
-RigidBodyIntegrator* cloneRigidBodyIntegrator(const RigidBodyIntegrator& integrator);
-RigidBodyIntegrator* asRigidBodyIntegrator(OpenMM::Integrator* integrator);
-} // namespace Python
-} // namespace OpenMMRigid
-
-%extend OpenMMRigid::RigidBodyIntegrator {
+%extend OpenMMRigid::RigidBodyIntegratorBase {
 %pythoncode %{
     def __getstate__(self):
         return _openmm_package.XmlSerializer.serialize(self)
 
     def __setstate__(self, serializationString):
-        integrator = _deserializeRigidBodyIntegrator(serializationString)
+        from openmmrigid.integrator import _mostDerived
+        integrator = _mostDerived(_deserializeRigidIntegrator(serializationString))
+        if not isinstance(integrator, type(self)):
+            raise _openmm_package.OpenMMException(
+                f"{type(self).__name__}: the serialized integrator is a {type(integrator).__name__}")
         self.this = integrator.this
 
     def __copy__(self):
-        duplicate = _cloneRigidBodyIntegrator(self)
+        from openmmrigid.integrator import _mostDerived
+        duplicate = _mostDerived(_cloneRigidIntegrator(self))
         duplicate.__class__ = self.__class__
         attributes = {key: value for key, value in self.__dict__.items() if key != 'this'}
         from copy import deepcopy

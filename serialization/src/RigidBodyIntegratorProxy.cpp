@@ -1,5 +1,6 @@
 #include "RigidBodyIntegratorProxy.h"
 #include "RigidBodyIntegrator.h"
+#include "RigidIntegratorSerialization.h"
 #include "openmm/OpenMMException.h"
 #include "openmm/serialization/SerializationNode.h"
 #include <memory>
@@ -13,16 +14,11 @@ namespace OpenMMRigid {
 
 namespace {
 
-/** The format written by serialize(). Version 1: the first. Version 2: adds the splitting. */
-const int CURRENT_VERSION = 2;
-
-/** The child node with the given name, or NULL if the node has none. */
-const SerializationNode* findChild(const SerializationNode& node, const string& name) {
-    for (const SerializationNode& child : node.getChildren())
-        if (child.getName() == name)
-            return &child;
-    return NULL;
-}
+/**
+ * The format written by serialize(). Version 1: the first. Version 2: adds the splitting. Version 3:
+ * adds the thermostat (thermostat, thermostatTemperature, thermostatCollisionTime) and randomSeed.
+ */
+const int CURRENT_VERSION = 3;
 
 } // namespace
 
@@ -32,22 +28,12 @@ RigidBodyIntegratorProxy::RigidBodyIntegratorProxy() : SerializationProxy("Rigid
 void RigidBodyIntegratorProxy::serialize(const void* object, SerializationNode& node) const {
     node.setIntProperty("version", CURRENT_VERSION);
     const RigidBodyIntegrator& integrator = *reinterpret_cast<const RigidBodyIntegrator*>(object);
-    node.setDoubleProperty("stepSize", integrator.getStepSize());
-    node.setDoubleProperty("constraintTolerance", integrator.getConstraintTolerance());
-    node.setIntProperty("integrationForceGroups", integrator.getIntegrationForceGroups());
-    node.setIntProperty("rotationMethod", integrator.getRotationMethod());
+    serializeRigidIntegratorBase(integrator, node);
     node.setIntProperty("splitting", integrator.getSplitting());
-    // An explicit empty list of bodies (every particle free) differs from "find the bodies in the
-    // System", so the flag is written on its own, not inferred from the number of bodies.
-    node.setBoolProperty("explicitBodies", integrator.hasExplicitBodies());
-    if (integrator.hasExplicitBodies()) {
-        SerializationNode& bodies = node.createChildNode("Bodies");
-        for (const vector<int>& body : integrator.getExplicitBodies()) {
-            SerializationNode& bodyNode = bodies.createChildNode("Body");
-            for (int particle : body)
-                bodyNode.createChildNode("Particle").setIntProperty("index", particle);
-        }
-    }
+    node.setBoolProperty("thermostat", integrator.hasThermostat());
+    node.setDoubleProperty("thermostatTemperature", integrator.getThermostatTemperature());
+    node.setDoubleProperty("thermostatCollisionTime", integrator.getThermostatCollisionTime());
+    node.setIntProperty("randomSeed", integrator.getRandomNumberSeed());
 }
 
 void* RigidBodyIntegratorProxy::deserialize(const SerializationNode& node) const {
@@ -56,29 +42,20 @@ void* RigidBodyIntegratorProxy::deserialize(const SerializationNode& node) const
         throw OpenMMException("RigidBodyIntegrator: unsupported serialization version " + to_string(version) +
                               " (this library reads versions 1 to " + to_string(CURRENT_VERSION) + ")");
     double stepSize = node.getDoubleProperty("stepSize");
-    const SerializationNode* bodiesNode = findChild(node, "Bodies");
+    vector<vector<int> > bodies;
     unique_ptr<RigidBodyIntegrator> integrator;
-    if (node.getBoolProperty("explicitBodies", bodiesNode != NULL)) {
-        vector<vector<int> > bodies;
-        if (bodiesNode != NULL) {
-            for (const SerializationNode& bodyNode : bodiesNode->getChildren()) {
-                vector<int> body;
-                for (const SerializationNode& particle : bodyNode.getChildren())
-                    body.push_back(particle.getIntProperty("index"));
-                bodies.push_back(body);
-            }
-        }
+    if (deserializeExplicitBodies(node, bodies))
         integrator.reset(new RigidBodyIntegrator(stepSize, bodies));
-    }
     else
         integrator.reset(new RigidBodyIntegrator(stepSize));
-    integrator->setConstraintTolerance(node.getDoubleProperty("constraintTolerance", integrator->getConstraintTolerance()));
-    integrator->setIntegrationForceGroups(node.getIntProperty("integrationForceGroups", integrator->getIntegrationForceGroups()));
-    int method = node.getIntProperty("rotationMethod", integrator->getRotationMethod());
-    integrator->setRotationMethod(static_cast<RigidBodyIntegrator::RotationMethod>(method));
+    deserializeRigidIntegratorSettings(node, *integrator);
     // Version 1 files have no splitting: they were written when every step was Verlet.
     int splitting = node.getIntProperty("splitting", RigidBodyIntegrator::Verlet);
     integrator->setSplitting(static_cast<RigidBodyIntegrator::Splitting>(splitting));
+    // Versions 1 and 2 have no thermostat: they were written when the integrator conserved energy.
+    if (node.getBoolProperty("thermostat", false))
+        integrator->setThermostat(node.getDoubleProperty("thermostatTemperature"), node.getDoubleProperty("thermostatCollisionTime"));
+    integrator->setRandomNumberSeed(node.getIntProperty("randomSeed", integrator->getRandomNumberSeed()));
     return integrator.release();
 }
 

@@ -1,11 +1,14 @@
 /*
  * Registers the serialization proxies of libOpenMMRigid when the library is loaded, as OpenMM's own
  * plugins do: XmlSerializer looks a proxy up by the dynamic type of the object, so
- * XmlSerializer::serialize<OpenMM::Integrator>() finds RigidBodyIntegratorProxy with nothing for the
- * caller to do. registerRigidSerializationProxies() is exported as well and may be called again.
+ * XmlSerializer::serialize<OpenMM::Integrator>() finds RigidBodyIntegratorProxy and
+ * RigidBodyLangevinIntegratorProxy with nothing for the caller to do. registerRigidSerializationProxies()
+ * is exported as well and may be called again.
  */
 #include "RigidBodyIntegrator.h"
 #include "RigidBodyIntegratorProxy.h"
+#include "RigidBodyLangevinIntegrator.h"
+#include "RigidBodyLangevinIntegratorProxy.h"
 #include "openmm/serialization/SerializationProxy.h"
 
 #if defined(_WIN32)
@@ -28,4 +31,6 @@ extern "C" OPENMM_EXPORT_RIGID void registerRigidSerializationProxies() {
     registered = true;
     OpenMM::SerializationProxy::registerProxy(typeid(OpenMMRigid::RigidBodyIntegrator),
                                               new OpenMMRigid::RigidBodyIntegratorProxy());
+    OpenMM::SerializationProxy::registerProxy(typeid(OpenMMRigid::RigidBodyLangevinIntegrator),
+                                              new OpenMMRigid::RigidBodyLangevinIntegratorProxy());
 }

@@ -274,9 +274,9 @@ def test_deepcopy_keeps_python_attributes():
 
 def test_xml_format():
     xml = openmm.XmlSerializer.serialize(configured([[0, 1, 2], [3]]))
-    assert 'type="RigidBodyIntegrator"' in xml and 'version="2"' in xml
+    assert 'type="RigidBodyIntegrator"' in xml and 'version="3"' in xml
     for attribute in ("stepSize", "constraintTolerance", "integrationForceGroups", "rotationMethod", "splitting",
-                      "explicitBodies"):
+                      "thermostat", "thermostatTemperature", "thermostatCollisionTime", "randomSeed", "explicitBodies"):
         assert attribute + "=" in xml
     assert xml.count("<Body>") == 2 and xml.count("<Particle") == 4
 
@@ -293,7 +293,7 @@ def test_xml_defaults_for_older_files():
 
 
 def test_xml_errors():
-    newer = '<?xml version="1.0" ?>\n<Integrator stepSize=".004" type="RigidBodyIntegrator" version="3"/>\n'
+    newer = '<?xml version="1.0" ?>\n<Integrator stepSize=".004" type="RigidBodyIntegrator" version="4"/>\n'
     with pytest.raises(openmm.OpenMMException, match="version"):
         openmm.XmlSerializer.deserialize(newer)
     badMethod = '<?xml version="1.0" ?>\n<Integrator stepSize=".004" rotationMethod="5" type="RigidBodyIntegrator" version="1"/>\n'

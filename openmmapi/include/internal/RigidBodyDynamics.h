@@ -1,11 +1,12 @@
 #ifndef OPENMMRIGID_RIGIDBODYDYNAMICS_H_
 #define OPENMMRIGID_RIGIDBODYDYNAMICS_H_
 
-#include "RigidBodyIntegrator.h"
+#include "RigidBodyIntegratorBase.h"
 #include "internal/RigidBodySystem.h"
 #include "internal/windowsExportRigid.h"
 #include "numerics/Matrix3.h"
 #include "openmm/Vec3.h"
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <vector>
@@ -18,9 +19,11 @@ class ThreadPool;
 namespace OpenMMRigid {
 
 /**
- * The physics of a RigidBodyIntegrator step on plain arrays of positions, velocities and forces
- * (every platform's kernel extracts its arrays and calls this class). A step is a sequence of
- * stages (internal/Splitting.h) with a force evaluation, which the caller performs, between them:
+ * The physics of a step of RigidBodyIntegrator or RigidBodyLangevinIntegrator on plain arrays of
+ * positions, velocities and forces (every platform's kernel extracts its arrays and calls this
+ * class). A step is a sequence of stages (internal/Splitting.h; for the Langevin integrator
+ * kickAndDrift, thermalize, drift, closingKick) with a force evaluation, which the caller performs,
+ * after each drift:
  *
  *   kickAndDrift(a, b):  for each body, a kick V += F a / M, L += tau a (lab frame) followed by the
  *                        free drift R += V b and the rotation of the attitude for a time b (exact
@@ -29,6 +32,9 @@ namespace OpenMMRigid {
  *   closingKick(a):      the last kick of the step, after which the rigid velocities
  *                        v = V + omega x (r - R) are written to the body particles; free particles:
  *                        kick and velocity constraints.
+ *   drift(b):            the free drift alone (the second half drift of a Langevin step).
+ *   thermalize(c, kT):   the exact Ornstein-Uhlenbeck step of the momenta (see below).
+ *   scaleVelocities(a):  every momentum times a (a thermostat's rescaling, after the closing kick).
  *
  * Each is one pass over the bodies (on the thread pool, if there is one). Between them the body
  * momenta live in this class; the particle velocities of the bodies are written once per step.
@@ -67,7 +73,50 @@ public:
      */
     void kickAndDrift(std::vector<OpenMM::Vec3>& positions, std::vector<OpenMM::Vec3>& velocities,
                       const std::vector<OpenMM::Vec3>& forces, double kick, double drift,
-                      RigidBodyIntegrator::RotationMethod method, double constraintTolerance);
+                      RigidBodyIntegratorBase::RotationMethod method, double constraintTolerance);
+    /**
+     * A free drift without a kick: kickAndDrift() with no forces.
+     *
+     * @param drift                the time of the free motion, in ps (may be negative)
+     * @param method               how the bodies rotate during the drift
+     * @param constraintTolerance  the tolerance of the constraints among free particles
+     */
+    void drift(std::vector<OpenMM::Vec3>& positions, std::vector<OpenMM::Vec3>& velocities, double drift,
+               RigidBodyIntegratorBase::RotationMethod method, double constraintTolerance);
+    /**
+     * The Ornstein-Uhlenbeck stage of a Langevin step: the exact solution, over the time whose
+     * damping factor is c, of dp = -gamma p dt + sqrt(2 gamma m kT) dW for every momentum p with
+     * mass (or moment) m. For each body, with xi independent standard normal deviates,
+     *
+     *     V   <- c V   + sqrt((1 - c^2) kT / M) xi          (each lab-frame component of the centre's velocity)
+     *     L_k <- c L_k + sqrt((1 - c^2) I_k kT) xi_k        (each principal axis with I_k > 0)
+     *
+     * where L_k is the angular momentum in the body's principal frame, whose canonical distribution
+     * is Gaussian with variance I_k kT; the axis of a linear body (I_0 = 0) carries none, and a
+     * single-particle body has no rotation. The xi_k are the body-frame components of a lab-frame
+     * standard normal vector, so that the noise does not depend on the choice of principal axes. Free particles: v <- c v + sqrt((1 - c^2) kT / m) xi,
+     * then the velocity constraints among them. Body particle velocities are written by the closing
+     * kick, as always.
+     *
+     * Body b draws its six deviates (three for V, three for L) from NormalStream(seed, b, step);
+     * free particle i (in the order of RigidBodySystem::getFreeParticles()) its three from
+     * NormalStream(seed, numBodies + i, step). The result depends on seed and step only, whatever
+     * the threads.
+     *
+     * @param c                    exp(-friction dt), in [0, 1]
+     * @param kT                   the thermal energy, in kJ/mol
+     * @param seed                 the key of the random numbers
+     * @param step                 the counter of the random numbers: a different value for every call
+     * @param constraintTolerance  the tolerance of the constraints among free particles
+     */
+    void thermalize(std::vector<OpenMM::Vec3>& positions, std::vector<OpenMM::Vec3>& velocities, double c, double kT,
+                    uint64_t seed, uint64_t step, double constraintTolerance);
+    /**
+     * Scale every momentum (bodies' linear and angular, free particles') by alpha, after the closing
+     * kick: the stochastic velocity rescaling of RigidBodyIntegrator's thermostat. The velocity
+     * constraints among free particles stay satisfied.
+     */
+    void scaleVelocities(std::vector<OpenMM::Vec3>& velocities, double alpha);
     /**
      * The last kick of a step: kick every body and free particle by the forces, write the bodies'
      * rigid velocities to their particles and apply the velocity constraints of the free particles.
@@ -93,11 +142,15 @@ private:
     /** The total force and the torque about the centre on a body. */
     void forceAndTorque(const RigidBody& body, const BodyState& state, const std::vector<OpenMM::Vec3>& positions,
                         const std::vector<OpenMM::Vec3>& forces, OpenMM::Vec3& force, OpenMM::Vec3& torque) const;
+    /** kickAndDrift() with forces, drift() without (forces null). */
+    void advance(std::vector<OpenMM::Vec3>& positions, std::vector<OpenMM::Vec3>& velocities,
+                 const std::vector<OpenMM::Vec3>* forces, double kick, double drift,
+                 RigidBodyIntegratorBase::RotationMethod method, double constraintTolerance);
     /** The free motion of body b for a time h, and its particles placed accordingly. */
-    void driftBody(int b, double h, RigidBodyIntegrator::RotationMethod method, std::vector<OpenMM::Vec3>& positions);
+    void driftBody(int b, double h, RigidBodyIntegratorBase::RotationMethod method, std::vector<OpenMM::Vec3>& positions);
     /** Make sure every body has a shape, taking explicit bodies' shapes from these positions. */
     void ensureShapes(const std::vector<OpenMM::Vec3>& positions);
-    void rotate(const RigidBody& body, BodyState& state, double dt, RigidBodyIntegrator::RotationMethod method) const;
+    void rotate(const RigidBody& body, BodyState& state, double dt, RigidBodyIntegratorBase::RotationMethod method) const;
     void fitBody(int index, std::vector<OpenMM::Vec3>& positions, std::vector<OpenMM::Vec3>& velocities);
     RigidBodySystem& system;
     std::vector<BodyState> states;

@@ -5,33 +5,77 @@
 #include "internal/RigidBodyDynamics.h"
 #include "internal/RigidBodySystem.h"
 #include "openmm/internal/ThreadPool.h"
+#include <cstdint>
+#include <iosfwd>
 #include <memory>
+#include <vector>
 
 namespace OpenMMRigid {
 
 /**
- * The RigidBodyIntegrator step on the Reference and CPU platforms (both keep positions, velocities
- * and forces in the Reference platform's arrays). It extracts the arrays and calls RigidBodyDynamics;
- * on the CPU platform the per-body work runs on as many threads as the platform's Threads property.
+ * What the rigid-body kernels of the Reference and CPU platforms share (both keep positions,
+ * velocities and forces in the Reference platform's arrays): the bodies and their dynamics, set up
+ * from the integrator, and the answers every RigidBodyStepKernel gives. On the CPU platform the
+ * per-body work runs on as many threads as the platform's Threads property.
+ *
+ * @tparam Kernel  the abstract kernel to implement (IntegrateRigidBodyStepKernel or IntegrateRigidBodyLangevinStepKernel)
  */
-class ReferenceIntegrateRigidBodyStepKernel : public IntegrateRigidBodyStepKernel {
+template <class Kernel>
+class ReferenceRigidBodyKernel : public Kernel {
 public:
-    ReferenceIntegrateRigidBodyStepKernel(std::string name, const OpenMM::Platform& platform) :
-            IntegrateRigidBodyStepKernel(name, platform) {
+    ReferenceRigidBodyKernel(std::string name, const OpenMM::Platform& platform) : Kernel(name, platform) {
     }
-    void initialize(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator);
-    void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator);
     void project(OpenMM::ContextImpl& context);
-    double computeKineticEnergy(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator);
+    double computeKineticEnergy(OpenMM::ContextImpl& context);
     void computeKineticEnergies(OpenMM::ContextImpl& context, double& translational, double& rotational);
     const RigidBodySystem& getBodies() const {
         return *bodies;
     }
-private:
+    /** Writes the seed and the counter of the random numbers. */
+    void createCheckpoint(OpenMM::ContextImpl& context, std::ostream& stream) const;
+    void loadCheckpoint(OpenMM::ContextImpl& context, std::istream& stream);
+protected:
+    /**
+     * Find the bodies of the context's System, set up their dynamics and seed the random numbers
+     * (seed 0, as in OpenMM's integrators, asks for one that differs from Context to Context).
+     */
+    void initializeBodies(OpenMM::ContextImpl& context, const RigidBodyIntegratorBase& integrator, int seed);
+    /** Advance the context's time and step count by dt after a step. */
+    void finishStep(OpenMM::ContextImpl& context, double dt);
     std::unique_ptr<RigidBodySystem> bodies;
     std::unique_ptr<RigidBodyDynamics> dynamics;
     std::unique_ptr<OpenMM::ThreadPool> threads;
     std::vector<double> masses;
+    /** The key of the random numbers, and the number of stages that have drawn from it (the counter). */
+    uint64_t seed = 0, randomCounter = 0;
+};
+
+/** The RigidBodyIntegrator step: the stages of its splitting, then the thermostat if there is one. */
+class ReferenceIntegrateRigidBodyStepKernel : public ReferenceRigidBodyKernel<IntegrateRigidBodyStepKernel> {
+public:
+    ReferenceIntegrateRigidBodyStepKernel(std::string name, const OpenMM::Platform& platform) :
+            ReferenceRigidBodyKernel<IntegrateRigidBodyStepKernel>(name, platform), thermostatWork(0.0) {
+    }
+    void initialize(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator);
+    void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator);
+    double getThermostatWork() const {
+        return thermostatWork;
+    }
+    /** Also writes the thermostat's work. */
+    void createCheckpoint(OpenMM::ContextImpl& context, std::ostream& stream) const;
+    void loadCheckpoint(OpenMM::ContextImpl& context, std::istream& stream);
+private:
+    double thermostatWork;
+};
+
+/** The RigidBodyLangevinIntegrator step: kick, half drift, Ornstein-Uhlenbeck, half drift, kick. */
+class ReferenceIntegrateRigidBodyLangevinStepKernel : public ReferenceRigidBodyKernel<IntegrateRigidBodyLangevinStepKernel> {
+public:
+    ReferenceIntegrateRigidBodyLangevinStepKernel(std::string name, const OpenMM::Platform& platform) :
+            ReferenceRigidBodyKernel<IntegrateRigidBodyLangevinStepKernel>(name, platform) {
+    }
+    void initialize(OpenMM::ContextImpl& context, const RigidBodyLangevinIntegrator& integrator);
+    void execute(OpenMM::ContextImpl& context, const RigidBodyLangevinIntegrator& integrator);
 };
 
 } // namespace OpenMMRigid

@@ -8,12 +8,14 @@ using namespace OpenMM;
 
 namespace OpenMMRigid {
 
-/** Creates the rigid-body kernels for the Reference and CPU platforms. */
+/** Creates the kernels of RigidBodyIntegrator and RigidBodyLangevinIntegrator for the Reference and CPU platforms. */
 class ReferenceRigidKernelFactory : public KernelFactory {
 public:
     KernelImpl* createKernelImpl(std::string name, const Platform& platform, ContextImpl& context) const {
         if (name == IntegrateRigidBodyStepKernel::Name())
             return new ReferenceIntegrateRigidBodyStepKernel(name, platform);
+        if (name == IntegrateRigidBodyLangevinStepKernel::Name())
+            return new ReferenceIntegrateRigidBodyLangevinStepKernel(name, platform);
         throw OpenMMException((std::string("Tried to create kernel with illegal kernel name '") + name + "'").c_str());
     }
 };
@@ -30,7 +32,10 @@ extern "C" OPENMM_EXPORT void registerPlatforms() {
 extern "C" OPENMM_EXPORT void registerKernelFactories() {
     for (int i = 0; i < Platform::getNumPlatforms(); i++) {
         Platform& platform = Platform::getPlatform(i);
-        if (platform.getName() == "Reference" || platform.getName() == "CPU")
-            platform.registerKernelFactory(OpenMMRigid::IntegrateRigidBodyStepKernel::Name(), new OpenMMRigid::ReferenceRigidKernelFactory());
+        if (platform.getName() == "Reference" || platform.getName() == "CPU") {
+            OpenMMRigid::ReferenceRigidKernelFactory* factory = new OpenMMRigid::ReferenceRigidKernelFactory();
+            platform.registerKernelFactory(OpenMMRigid::IntegrateRigidBodyStepKernel::Name(), factory);
+            platform.registerKernelFactory(OpenMMRigid::IntegrateRigidBodyLangevinStepKernel::Name(), factory);
+        }
     }
 }

@@ -1,0 +1,157 @@
+#ifndef OPENMMRIGID_RIGIDBODYINTEGRATORBASE_H_
+#define OPENMMRIGID_RIGIDBODYINTEGRATORBASE_H_
+
+#include "openmm/Integrator.h"
+#include "openmm/Kernel.h"
+#include "internal/windowsExportRigid.h"
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+namespace OpenMMRigid {
+
+class RigidBodyStepKernel;
+struct RigidBody;
+
+/**
+ * What every rigid-body integrator of this plugin has in common: the bodies (found from the
+ * System's rigid constraint clusters or given explicitly), the rotation method of their free drift,
+ * the questions one may ask about them (kinds, moments, kinetic energies, degrees of freedom,
+ * temperature), and the step loop of the integrator contract (update the context state, re-fit the
+ * bodies if something moved the particles, compute the forces of the integration force groups,
+ * execute the kernel). RigidBodyIntegrator (constant energy) and RigidBodyLangevinIntegrator
+ * (constant temperature) derive from it; it cannot be created on its own.
+ */
+class OPENMM_EXPORT_RIGID RigidBodyIntegratorBase : public OpenMM::Integrator {
+public:
+    /** How the orientation of each body is advanced during the free drift. */
+    enum RotationMethod {
+        /** The exact torque-free motion (van Zon and Schofield, 2007). */
+        Exact = 0,
+        /** The symplectic NO_SQUISH splitting of the free rotation (Miller et al., 2002). */
+        NoSquish = 1
+    };
+    /** Get the method used to advance the orientation of each body. */
+    RotationMethod getRotationMethod() const {
+        return rotationMethod;
+    }
+    /**
+     * Set the method used to advance the orientation of each body.
+     *
+     * @throws OpenMMException if the value is not a RotationMethod
+     */
+    void setRotationMethod(RotationMethod method);
+    /** Get whether the bodies were given explicitly (rather than found from the System's constraints). */
+    bool hasExplicitBodies() const {
+        return explicitBodies;
+    }
+    /** Get the explicit bodies passed to the constructor (empty when they are found from the System). */
+    const std::vector<std::vector<int> >& getExplicitBodies() const {
+        return bodies;
+    }
+    /**
+     * Get the number of rigid bodies. Only available once the integrator is bound to a Context.
+     */
+    int getNumBodies() const;
+    /**
+     * Get the particle indices of a rigid body. Only available once the integrator is bound to a Context.
+     *
+     * @param index  the index of the body, from 0 to getNumBodies() - 1
+     */
+    std::vector<int> getBodyParticles(int index) const;
+    /**
+     * Get the kind of a rigid body: "point" (one particle: translation only), "linear" (two rotational
+     * degrees of freedom), "spherical", "symmetric" or "asymmetric" (by its principal moments).
+     * Only available once the integrator is bound to a Context; for an explicit body, once positions
+     * have been set.
+     *
+     * @param index  the index of the body, from 0 to getNumBodies() - 1
+     */
+    std::string getBodyKind(int index) const;
+    /**
+     * Get the principal moments of inertia of a rigid body, in amu nm^2, in ascending order.
+     *
+     * @param index  the index of the body, from 0 to getNumBodies() - 1
+     */
+    std::vector<double> getBodyMoments(int index) const;
+    /**
+     * Get the kinetic energy of the translation of the bodies' centres of mass plus that of the free
+     * particles, measured in kJ/mol. Only available once the integrator is bound to a Context.
+     */
+    double getTranslationalKineticEnergy();
+    /**
+     * Get the kinetic energy of the rotation of the bodies about their centres of mass, measured in kJ/mol.
+     * Only available once the integrator is bound to a Context.
+     */
+    double getRotationalKineticEnergy();
+    /**
+     * Get the number of degrees of freedom of the system as this integrator moves it: 3 per free
+     * particle, less one per constraint among free particles, plus 3 translational and 0 (point),
+     * 2 (linear) or 3 rotational ones per body, less 3 if the System has a CMMotionRemover. With it,
+     * the temperature is 2 KE / (dof k_B). Only available once the integrator is bound to a Context.
+     */
+    int getNumDegreesOfFreedom() const;
+    /**
+     * Get the instantaneous temperature of the system, 2 KE / (dof k_B) with dof from
+     * getNumDegreesOfFreedom(), measured in K. openmm.app.StateDataReporter uses this method when an
+     * integrator has it, so its temperature is right for explicit bodies too. Only available once
+     * the integrator is bound to a Context.
+     */
+    double computeSystemTemperature();
+    /**
+     * Advance a simulation through time by taking a series of time steps.
+     *
+     * @param steps   the number of time steps to take
+     */
+    void step(int steps);
+protected:
+    /**
+     * @param className  the name of the concrete class, for messages
+     * @param stepSize   the step size, measured in ps
+     */
+    RigidBodyIntegratorBase(const std::string& className, double stepSize);
+    /**
+     * @param className  the name of the concrete class, for messages
+     * @param stepSize   the step size, measured in ps
+     * @param bodies     the particle indices of each body
+     */
+    RigidBodyIntegratorBase(const std::string& className, double stepSize, const std::vector<std::vector<int> >& bodies);
+    /** Create the kernel named by getKernelNames() and have the concrete class initialize it. */
+    void initialize(OpenMM::ContextImpl& context);
+    void cleanup();
+    void stateChanged(OpenMM::State::DataType changed);
+    double computeKineticEnergy();
+    bool kineticEnergyRequiresForce() const {
+        return false;
+    }
+    /** The kernel writes the state of its random numbers (after the positions and velocities OpenMM writes). */
+    void createCheckpoint(std::ostream& stream) const;
+    void loadCheckpoint(std::istream& stream);
+    /** Initialize the kernel just created for this integrator (the concrete class knows its type). */
+    virtual void initializeKernel(OpenMM::ContextImpl& context) = 0;
+    /**
+     * Take one step with the kernel. On entry the context holds the forces at the current positions
+     * and the bodies agree with them; on exit it holds the forces at the new positions.
+     */
+    virtual void executeKernel(OpenMM::ContextImpl& context) = 0;
+    /** The kernel, once the integrator is bound to a Context (throws otherwise). */
+    const RigidBodyStepKernel& getKernel() const;
+    RigidBodyStepKernel& getKernel();
+    /** "RigidBodyIntegrator" or "RigidBodyLangevinIntegrator", for messages. */
+    const std::string& getClassName() const {
+        return className;
+    }
+    OpenMM::Kernel kernel;
+private:
+    void checkBodies() const;
+    const RigidBody& getShapedBody(int index) const;
+    std::string className;
+    std::vector<std::vector<int> > bodies;
+    bool explicitBodies;
+    RotationMethod rotationMethod;
+    bool bound, forcesAreValid, needsProjection;
+};
+
+} // namespace OpenMMRigid
+
+#endif /*OPENMMRIGID_RIGIDBODYINTEGRATORBASE_H_*/

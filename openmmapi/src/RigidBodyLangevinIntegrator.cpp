@@ -1,0 +1,65 @@
+#include "RigidBodyLangevinIntegrator.h"
+#include "RigidBodyKernels.h"
+#include "openmm/OpenMMException.h"
+#include "openmm/internal/ContextImpl.h"
+#include <cmath>
+#include <sstream>
+#include <string>
+
+using namespace OpenMM;
+using namespace std;
+
+namespace OpenMMRigid {
+
+namespace {
+
+/** Throw, naming the quantity, its unit and the value, unless value is finite and >= 0. */
+void requireNonNegative(double value, const string& quantity, const string& unit) {
+    if (!(isfinite(value) && value >= 0.0)) {
+        stringstream text;
+        text.precision(17);
+        text << "RigidBodyLangevinIntegrator: the " << quantity << " must be a finite number >= 0 (in " << unit << "); got " << value;
+        throw OpenMMException(text.str());
+    }
+}
+
+} // namespace
+
+RigidBodyLangevinIntegrator::RigidBodyLangevinIntegrator(double temperature, double frictionCoeff, double stepSize) :
+        RigidBodyIntegratorBase("RigidBodyLangevinIntegrator", stepSize), randomNumberSeed(0) {
+    setTemperature(temperature);
+    setFriction(frictionCoeff);
+}
+
+RigidBodyLangevinIntegrator::RigidBodyLangevinIntegrator(double temperature, double frictionCoeff, double stepSize,
+                                                         const vector<vector<int> >& bodies) :
+        RigidBodyIntegratorBase("RigidBodyLangevinIntegrator", stepSize, bodies), randomNumberSeed(0) {
+    setTemperature(temperature);
+    setFriction(frictionCoeff);
+}
+
+void RigidBodyLangevinIntegrator::setTemperature(double temp) {
+    requireNonNegative(temp, "temperature", "K");
+    temperature = temp;
+}
+
+void RigidBodyLangevinIntegrator::setFriction(double coeff) {
+    requireNonNegative(coeff, "friction", "1/ps");
+    friction = coeff;
+}
+
+vector<string> RigidBodyLangevinIntegrator::getKernelNames() {
+    vector<string> names;
+    names.push_back(IntegrateRigidBodyLangevinStepKernel::Name());
+    return names;
+}
+
+void RigidBodyLangevinIntegrator::initializeKernel(ContextImpl& context) {
+    kernel.getAs<IntegrateRigidBodyLangevinStepKernel>().initialize(context, *this);
+}
+
+void RigidBodyLangevinIntegrator::executeKernel(ContextImpl& context) {
+    kernel.getAs<IntegrateRigidBodyLangevinStepKernel>().execute(context, *this);
+}
+
+} // namespace OpenMMRigid

@@ -1,0 +1,61 @@
+#include "RigidIntegratorSerialization.h"
+
+using namespace OpenMM;
+using namespace std;
+
+namespace OpenMMRigid {
+
+namespace {
+
+/** The child node with the given name, or NULL if the node has none. */
+const SerializationNode* findChild(const SerializationNode& node, const string& name) {
+    for (const SerializationNode& child : node.getChildren())
+        if (child.getName() == name)
+            return &child;
+    return NULL;
+}
+
+} // namespace
+
+void serializeRigidIntegratorBase(const RigidBodyIntegratorBase& integrator, SerializationNode& node) {
+    node.setDoubleProperty("stepSize", integrator.getStepSize());
+    node.setDoubleProperty("constraintTolerance", integrator.getConstraintTolerance());
+    node.setIntProperty("integrationForceGroups", integrator.getIntegrationForceGroups());
+    node.setIntProperty("rotationMethod", integrator.getRotationMethod());
+    // An explicit empty list of bodies (every particle free) differs from "find the bodies in the
+    // System", so the flag is written on its own, not inferred from the number of bodies.
+    node.setBoolProperty("explicitBodies", integrator.hasExplicitBodies());
+    if (integrator.hasExplicitBodies()) {
+        SerializationNode& bodies = node.createChildNode("Bodies");
+        for (const vector<int>& body : integrator.getExplicitBodies()) {
+            SerializationNode& bodyNode = bodies.createChildNode("Body");
+            for (int particle : body)
+                bodyNode.createChildNode("Particle").setIntProperty("index", particle);
+        }
+    }
+}
+
+bool deserializeExplicitBodies(const SerializationNode& node, vector<vector<int> >& bodies) {
+    const SerializationNode* bodiesNode = findChild(node, "Bodies");
+    bodies.clear();
+    if (!node.getBoolProperty("explicitBodies", bodiesNode != NULL))
+        return false;
+    if (bodiesNode != NULL) {
+        for (const SerializationNode& bodyNode : bodiesNode->getChildren()) {
+            vector<int> body;
+            for (const SerializationNode& particle : bodyNode.getChildren())
+                body.push_back(particle.getIntProperty("index"));
+            bodies.push_back(body);
+        }
+    }
+    return true;
+}
+
+void deserializeRigidIntegratorSettings(const SerializationNode& node, RigidBodyIntegratorBase& integrator) {
+    integrator.setConstraintTolerance(node.getDoubleProperty("constraintTolerance", integrator.getConstraintTolerance()));
+    integrator.setIntegrationForceGroups(node.getIntProperty("integrationForceGroups", integrator.getIntegrationForceGroups()));
+    int method = node.getIntProperty("rotationMethod", integrator.getRotationMethod());
+    integrator.setRotationMethod(static_cast<RigidBodyIntegratorBase::RotationMethod>(method));
+}
+
+} // namespace OpenMMRigid

@@ -1,0 +1,38 @@
+#ifndef OPENMMRIGID_RIGIDINTEGRATORSERIALIZATION_H_
+#define OPENMMRIGID_RIGIDINTEGRATORSERIALIZATION_H_
+
+/*
+ * What the serialization proxies of RigidBodyIntegrator and RigidBodyLangevinIntegrator share: the
+ * settings of RigidBodyIntegratorBase (step size, constraint tolerance, integration force groups,
+ * rotation method) and the explicit bodies,
+ *
+ *     explicitBodies="1"
+ *     <Bodies>
+ *         <Body><Particle index="0"/><Particle index="1"/>...</Body>
+ *         ...
+ *     </Bodies>
+ *
+ * Private to the serialization library.
+ */
+
+#include "RigidBodyIntegratorBase.h"
+#include "openmm/serialization/SerializationNode.h"
+#include <vector>
+
+namespace OpenMMRigid {
+
+/** Write the step size, constraint tolerance, integration force groups, rotation method and explicit bodies. */
+void serializeRigidIntegratorBase(const RigidBodyIntegratorBase& integrator, OpenMM::SerializationNode& node);
+
+/**
+ * Read whether the bodies are explicit and, if so, the bodies. Files without the explicitBodies flag
+ * (none written so far) would have explicit bodies exactly when they hold a Bodies node.
+ */
+bool deserializeExplicitBodies(const OpenMM::SerializationNode& node, std::vector<std::vector<int> >& bodies);
+
+/** Read the constraint tolerance, integration force groups and rotation method, each with the integrator's value as default. */
+void deserializeRigidIntegratorSettings(const OpenMM::SerializationNode& node, RigidBodyIntegratorBase& integrator);
+
+} // namespace OpenMMRigid
+
+#endif /*OPENMMRIGID_RIGIDINTEGRATORSERIALIZATION_H_*/

@@ -1,0 +1,655 @@
+/* -------------------------------------------------------------------------- *
+ *                               OpenMM-Rigid                                 *
+ * -------------------------------------------------------------------------- *
+ * Tests of constant temperature, shared by every platform: the               *
+ * RigidBodyLangevinIntegrator and RigidBodyIntegrator's stochastic velocity  *
+ * rescaling thermostat. Each platform's Test<Platform>RigidBodyThermostats   *
+ * .cpp includes this file and calls runMain() with runThermostatTests.       *
+ *                                                                            *
+ * Every check compares against something known:                              *
+ * - Philox4x32-10 against the known-answer vectors of Random123;            *
+ * - Langevin: free bodies of every kind and free atoms (no forces) sample   *
+ *   the canonical momenta exactly: the kinetic energy of each kind of       *
+ *   degree of freedom has the mean and variance of a Gamma distribution    *
+ *   with shape dof/2 and scale kT (5 standard errors), with either rotation *
+ *   method;                                                                 *
+ * - Langevin, particles in a harmonic trap at omega dt = 1: BAOAB samples   *
+ *   positions exactly, <x^2> = kT/k, and its on-step velocities have        *
+ *   <v^2> = (kT/m)(1 - (omega dt)^2/4) (5 standard errors), for single-     *
+ *   particle bodies and free particles alike;                               *
+ * - Langevin at T = 0 without forces: the kinetic energy decays exactly as  *
+ *   c^(2n);                                                                 *
+ * - Langevin with friction 0 is the constant-energy step: independent of    *
+ *   the seed bit for bit, and the trajectory of RigidBodyIntegrator         *
+ *   (Verlet) to rounding;                                                   *
+ * - thermostat (Bussi): the total kinetic energy of free bodies is Gamma     *
+ *   distributed; at T = 0 it decays as c^n; total energy minus the          *
+ *   thermostat's work is conserved like the energy of the constant-energy   *
+ *   integrator while the work is large; removed, the step is the            *
+ *   constant-energy one bit for bit;                                        *
+ * - both: the same seed gives the same trajectory (bit for bit; on CPU with *
+ *   1 or 2 threads), another seed or seed 0 another; a checkpoint continues *
+ *   the random sequence (and the thermostat's work) exactly;                *
+ * - constraints among free particles and body shapes hold under the noise;  *
+ * - bad temperatures, frictions and collision times raise OpenMMException   *
+ *   naming the value, leaving the integrator and its Context usable.        *
+ * -------------------------------------------------------------------------- */
+
+#include "TestRigidBodyIntegrator.h"
+#include "RigidBodyLangevinIntegrator.h"
+#include "numerics/Philox.h"
+#include "numerics/StochasticRescaling.h"
+#include "openmm/CustomExternalForce.h"
+
+namespace RigidBodyIntegratorTests {
+
+struct LangevinRun {
+    std::unique_ptr<RigidBodyLangevinIntegrator> integrator;
+    std::unique_ptr<Context> context;
+};
+
+LangevinRun startLangevin(const Scene& scene, Platform& platform, double temperature, double friction, double dt, int seed,
+                          const std::map<string, string>& properties = platformProperties) {
+    LangevinRun run;
+    run.integrator.reset(new RigidBodyLangevinIntegrator(temperature, friction, dt, scene.bodies));
+    run.integrator->setRandomNumberSeed(seed);
+    run.context.reset(new Context(*scene.system, *run.integrator, platform, properties));
+    run.context->setPositions(scene.positions);
+    run.context->setVelocities(scene.velocities);
+    return run;
+}
+
+/** The mean and the standard error of the mean of independent samples; the sample variance and its standard error. */
+void sampleMoments(const vector<double>& x, double& mean, double& meanError, double& variance, double& varianceError) {
+    const double n = x.size();
+    mean = 0;
+    for (double v : x)
+        mean += v/n;
+    double m2 = 0, m4 = 0;
+    for (double v : x) {
+        m2 += (v - mean)*(v - mean)/n;
+        m4 += pow(v - mean, 4)/n;
+    }
+    variance = m2*n/(n - 1);
+    meanError = sqrt(variance/n);
+    varianceError = sqrt((m4 - m2*m2)/n);
+}
+
+// ------------------------------------------------------------------------------------------------
+// The random numbers
+// ------------------------------------------------------------------------------------------------
+
+void testPhiloxKnownAnswers() {
+    // Random123 1.14, tests/kat_vectors: the three "philox4x32 10" lines (counter, key, result).
+    struct Vector {
+        std::array<uint32_t, 4> counter;
+        std::array<uint32_t, 2> key;
+        std::array<uint32_t, 4> result;
+    };
+    const Vector vectors[] = {
+        {{0, 0, 0, 0}, {0, 0}, {0x6627e8d5, 0xe169c58d, 0xbc57ac4c, 0x9b00dbd8}},
+        {{0xffffffff, 0xffffffff, 0xffffffff, 0xffffffff}, {0xffffffff, 0xffffffff}, {0x408f276d, 0x41c83b0e, 0xa20bc7c6, 0x6d5451fd}},
+        {{0x243f6a88, 0x85a308d3, 0x13198a2e, 0x03707344}, {0xa4093822, 0x299f31d0}, {0xd16cfe09, 0x94fdcceb, 0x5001e420, 0x24126ea1}},
+    };
+    for (const Vector& v : vectors)
+        check(philox4x32(v.counter, v.key) == v.result, message("Philox4x32-10 of counter ", v.counter[0], "...: wrong output"));
+    // The normal deviates of one stream: mean 0, variance 1, fourth moment 3 (5 standard errors).
+    NormalStream stream(12345, 7, 99);
+    const int n = 200000;
+    double sum = 0, sum2 = 0, sum4 = 0;
+    for (int i = 0; i < n; i++) {
+        double x = stream.next();
+        sum += x;
+        sum2 += x*x;
+        sum4 += x*x*x*x;
+    }
+    check(fabs(sum/n) < 5/sqrt(n), message("normal deviates: mean ", sum/n));
+    check(fabs(sum2/n - 1) < 5*sqrt(2.0/n), message("normal deviates: variance ", sum2/n));
+    check(fabs(sum4/n - 3) < 5*sqrt(96.0/n), message("normal deviates: fourth moment ", sum4/n));
+    // Streams and steps are independent: another stream or step gives other numbers.
+    NormalStream same(12345, 7, 99), otherStream(12345, 8, 99), otherStep(12345, 7, 100), otherSeed(12346, 7, 99);
+    double first = same.next();
+    check(first != otherStream.next() && first != otherStep.next() && first != otherSeed.next(), "streams differ");
+}
+
+// ------------------------------------------------------------------------------------------------
+// Canonical sampling
+// ------------------------------------------------------------------------------------------------
+
+/**
+ * Free bodies of every kind and two free atoms, no forces: the free motion conserves the kinetic
+ * energy of each body and the Ornstein-Uhlenbeck step leaves the canonical momenta invariant, so
+ * every sample of the kinetic energy of n degrees of freedom is Gamma(n/2, kT) distributed, exactly
+ * (no step-size error). With friction dt = 0.5 (c = 0.61) samples 4 steps apart correlate by
+ * c^8 = 0.02, so they count as independent. Checked by kind: translation (bodies and free atoms),
+ * and the rotation of linear, spherical, symmetric and asymmetric bodies; a wrong noise amplitude
+ * for any of them (sqrt(I) for I, 1 - c for 1 - c^2, noise along a linear body's axis) shifts the mean.
+ * NO_SQUISH's free rotation keeps the kinetic energy too (it is a composition of exact rotations
+ * about the principal axes), so the same holds with either rotation method.
+ */
+void testCanonicalKineticEnergy(Platform& platform, RigidBodyIntegratorBase::RotationMethod method) {
+    Scene scene = makeCluster(5, 4, 4, 4, false);
+    const double temperature = 300, kT = boltzmann*temperature, dt = 0.002, friction = 0.5/dt;
+    LangevinRun run = startLangevin(scene, platform, temperature, friction, dt, 17);
+    run.integrator->setRotationMethod(method);
+    const vector<string> kinds = {"point", "linear", "spherical", "symmetric", "asymmetric"};
+    vector<string> kindOf(scene.bodies.size());
+    std::map<string, int> rotationalDof = {{"point", 0}, {"linear", 2}, {"spherical", 3}, {"symmetric", 3}, {"asymmetric", 3}};
+    std::map<string, int> dof;
+    int translationalDof = 3*(scene.bodies.size() + scene.free.size());
+    for (size_t b = 0; b < scene.bodies.size(); b++) {
+        kindOf[b] = run.integrator->getBodyKind(b);
+        dof[kindOf[b]] += rotationalDof[kindOf[b]];
+    }
+    run.integrator->step(20);
+    const int samples = 2000, interval = 4;
+    vector<double> translational;
+    std::map<string, vector<double> > rotational;
+    for (int s = 0; s < samples; s++) {
+        run.integrator->step(interval);
+        vector<Vec3> v = velocitiesOf(*run.context);
+        double trans = 0;
+        std::map<string, double> rot;
+        for (size_t b = 0; b < scene.bodies.size(); b++) {
+            Vec3 momentum;
+            double mass = 0;
+            for (int p : scene.bodies[b]) {
+                momentum += v[p]*scene.masses[p];
+                mass += scene.masses[p];
+            }
+            Vec3 centre = momentum/mass;
+            trans += 0.5*mass*centre.dot(centre);
+            for (int p : scene.bodies[b])
+                rot[kindOf[b]] += 0.5*scene.masses[p]*(v[p] - centre).dot(v[p] - centre);
+        }
+        for (int p : scene.free)
+            trans += 0.5*scene.masses[p]*v[p].dot(v[p]);
+        translational.push_back(trans);
+        for (const string& kind : kinds)
+            if (dof[kind] > 0)
+                rotational[kind].push_back(rot[kind]);
+    }
+    auto checkGamma = [&](const string& what, const vector<double>& energies, int n) {
+        double mean, meanError, variance, varianceError;
+        sampleMoments(energies, mean, meanError, variance, varianceError);
+        double expectedMean = 0.5*n*kT, expectedVariance = 0.5*n*kT*kT;
+        string report = message(methodName(method), ", ", what, " (", n, " dof): mean ", mean, " +- ", meanError, " kJ/mol (expected ", expectedMean,
+                                "), variance ", variance, " +- ", varianceError, " (expected ", expectedVariance, ")");
+        std::cout << report << std::endl;
+        check(fabs(mean - expectedMean) < 5*meanError, report);
+        check(fabs(variance - expectedVariance) < 5*varianceError, report);
+    };
+    checkGamma("translation", translational, translationalDof);
+    for (const string& kind : kinds)
+        if (dof[kind] > 0)
+            checkGamma("rotation of " + kind + " bodies", rotational[kind], dof[kind]);
+}
+
+/**
+ * Single-particle bodies and free particles (masses 20 and 40) in isotropic harmonic traps with
+ * omega dt = 1 for every particle. For a harmonic oscillator BAOAB samples the positions exactly,
+ * <x^2> = kT/k, and the velocities after its closing half kick with <v^2> = (kT/m)(1 - (omega dt)^2/4)
+ * (Leimkuhler and Matthews, Appl. Math. Res. Express 2013, 34): 3/4 of kT/m here. Another order of
+ * the stages (OBABO, ABOBA) or a half-step O stage would give other values. Samples 10 steps apart;
+ * each coordinate of each particle is an independent oscillator.
+ */
+void testHarmonicTrap(Platform& platform) {
+    const double temperature = 300, kT = boltzmann*temperature, dt = 0.004, omega = 1.0/dt, friction = 0.5/dt;
+    const int numEach = 50;
+    Scene scene;
+    CustomExternalForce* trap = new CustomExternalForce("0.5*k*(x*x + y*y + z*z)");
+    trap->addPerParticleParameter("k");
+    std::mt19937_64 rng(3);
+    std::normal_distribution<double> normal;
+    for (int i = 0; i < 4*numEach; i++) {
+        double mass = (i%2 == 0 ? 20.0 : 40.0), k = mass*omega*omega;
+        int p = scene.system->addParticle(mass);
+        trap->addParticle(p, {k});
+        scene.masses.push_back(mass);
+        scene.positions.push_back(Vec3(normal(rng), normal(rng), normal(rng))*sqrt(kT/k));
+        scene.velocities.push_back(Vec3(normal(rng), normal(rng), normal(rng))*sqrt(kT/mass));
+        if (i < 2*numEach)
+            scene.bodies.push_back({p});
+        else
+            scene.free.push_back(p);
+    }
+    scene.system->addForce(trap);
+    LangevinRun run = startLangevin(scene, platform, temperature, friction, dt, 29);
+    run.integrator->step(50);
+    std::map<string, vector<double> > positionRatios, velocityRatios;
+    for (int s = 0; s < 1500; s++) {
+        run.integrator->step(10);
+        State state = run.context->getState(State::Positions | State::Velocities);
+        const vector<Vec3>& r = state.getPositions();
+        const vector<Vec3>& v = state.getVelocities();
+        for (size_t p = 0; p < r.size(); p++) {
+            string group = (p < 2*(size_t) numEach ? "single-particle bodies" : "free particles");
+            double k = scene.masses[p]*omega*omega;
+            for (int c = 0; c < 3; c++) {
+                positionRatios[group].push_back(k*r[p][c]*r[p][c]/kT);
+                velocityRatios[group].push_back(scene.masses[p]*v[p][c]*v[p][c]/kT);
+            }
+        }
+    }
+    for (const string& group : {string("single-particle bodies"), string("free particles")}) {
+        double mean, error, variance, varianceError;
+        sampleMoments(positionRatios[group], mean, error, variance, varianceError);
+        string report = message(group, " in a harmonic trap, omega dt = 1: k <x^2>/kT = ", mean, " +- ", error, " (expected 1)");
+        std::cout << report << std::endl;
+        check(fabs(mean - 1) < 5*error, report);
+        sampleMoments(velocityRatios[group], mean, error, variance, varianceError);
+        report = message(group, " in a harmonic trap, omega dt = 1: m <v^2>/kT = ", mean, " +- ", error, " (expected 0.75)");
+        std::cout << report << std::endl;
+        check(fabs(mean - 0.75) < 5*error, report);
+    }
+}
+
+/**
+ * At temperature 0 without forces each step multiplies every momentum by c = exp(-friction dt) and
+ * the free motion keeps the kinetic energy: after n steps it is c^(2n) times the first, for bodies
+ * of every kind and free atoms (to rounding).
+ */
+void testDampedAtZeroTemperature(Platform& platform) {
+    Scene scene = makeCluster(3, 3, 3, 3, false);
+    const double dt = 0.002, friction = 20.0;
+    LangevinRun run = startLangevin(scene, platform, 0.0, friction, dt, 1);
+    double initial = 0;
+    for (size_t i = 0; i < scene.masses.size(); i++)
+        initial += 0.5*scene.masses[i]*scene.velocities[i].dot(scene.velocities[i]);
+    const int steps = 40;
+    run.integrator->step(steps);
+    double kinetic = run.context->getState(State::Energy).getKineticEnergy();
+    double expected = initial*exp(-2*friction*dt*steps);
+    string report = message("T = 0: kinetic energy ", kinetic, " kJ/mol after ", steps, " steps, expected ", expected);
+    std::cout << report << std::endl;
+    check(fabs(kinetic/expected - 1) < 1e-10, report);
+    ASSERT_EQUAL_TOL(expected, run.integrator->getTranslationalKineticEnergy() + run.integrator->getRotationalKineticEnergy(), 1e-10);
+}
+
+// ------------------------------------------------------------------------------------------------
+// Friction 0, seeds, threads, checkpoints
+// ------------------------------------------------------------------------------------------------
+
+/**
+ * With friction 0 the step is kick, half drift, half drift, kick: no random numbers (the seed does
+ * not matter, bit for bit), and the same trajectory as RigidBodyIntegrator's Verlet step, whose one
+ * exact drift is the composition of the two halves (to rounding, amplified by the cluster's chaos
+ * over 100 steps). Its energy error is that of the constant-energy integrator.
+ */
+void testFrictionZero(Platform& platform) {
+    Scene scene = makeCluster(7, 3, 3, 2, true);
+    const double dt = 0.001;
+    const int steps = 100;
+    LangevinRun first = startLangevin(scene, platform, 300.0, 0.0, dt, 1), second = startLangevin(scene, platform, 300.0, 0.0, dt, 2);
+    Run verlet = startRigid(scene, platform, dt, RigidBodyIntegrator::Exact);
+    vector<double> times, langevinEnergies, verletEnergies;
+    recordEnergies(*first.context, *first.integrator, steps, 5, times, langevinEnergies);
+    recordEnergies(*verlet.context, *verlet.integrator, steps, 5, times, verletEnergies);
+    second.integrator->step(steps);
+    vector<Vec3> positions = positionsOf(*first.context);
+    check(maxDifference(positions, positionsOf(*second.context)) == 0.0, "friction 0: the seed changes the trajectory");
+    double difference = maxDifference(positions, positionsOf(*verlet.context));
+    double langevinError = maxDeviation(langevinEnergies), verletError = maxDeviation(verletEnergies);
+    string report = message("friction 0: positions differ from RigidBodyIntegrator's by ", difference, " nm; max |E - E(0)| ",
+                            langevinError, " kJ/mol (RigidBodyIntegrator: ", verletError, ")");
+    std::cout << report << std::endl;
+    check(difference < 1e-9, report);
+    check(fabs(langevinError - verletError) < 1e-6*verletError + 1e-9, report);
+}
+
+void testSeeds(Platform& platform) {
+    Scene scene = makeCluster(11, 3, 3, 2, true);
+    auto positionsAfter = [&](int seed, const std::map<string, string>& properties) {
+        LangevinRun run = startLangevin(scene, platform, 300.0, 5.0, 0.002, seed, properties);
+        run.integrator->step(50);
+        check(run.integrator->getRandomNumberSeed() == seed, "the seed is kept");
+        return positionsOf(*run.context);
+    };
+    vector<Vec3> a = positionsAfter(5, platformProperties), b = positionsAfter(5, platformProperties);
+    check(maxDifference(a, b) == 0.0, message("the same seed gave positions ", maxDifference(a, b), " nm apart"));
+    double other = maxDifference(a, positionsAfter(6, platformProperties));
+    check(other > 1e-4, message("seeds 5 and 6 gave positions only ", other, " nm apart"));
+    double zero = maxDifference(positionsAfter(0, platformProperties), positionsAfter(0, platformProperties));
+    check(zero > 1e-4, message("two Contexts with seed 0 gave positions only ", zero, " nm apart"));
+    if (platform.getName() == "CPU") {
+        // Over 64 bodies the per-body work runs on the thread pool: the trajectory must not depend
+        // on the number of threads. (No forces, so that only this plugin's arithmetic is compared.)
+        Scene many = makeCluster(13, 4, 4, 5, false);
+        vector<Vec3> byThreads[2];
+        for (int k = 0; k < 2; k++) {
+            std::map<string, string> properties = platformProperties;
+            properties["Threads"] = (k == 0 ? "1" : "2");
+            LangevinRun run = startLangevin(many, platform, 300.0, 5.0, 0.002, 8, properties);
+            run.integrator->step(30);
+            byThreads[k] = positionsOf(*run.context);
+        }
+        check(maxDifference(byThreads[0], byThreads[1]) == 0.0, "1 and 2 threads gave different trajectories");
+    }
+}
+
+void testCheckpoint(Platform& platform) {
+    Scene scene = makeCluster(11, 3, 3, 2, true);
+    LangevinRun run = startLangevin(scene, platform, 300.0, 5.0, 0.002, 3);
+    run.integrator->step(20);
+    std::stringstream checkpoint;
+    run.context->createCheckpoint(checkpoint);
+    run.integrator->step(30);
+    vector<Vec3> straight = positionsOf(*run.context);
+    run.context->loadCheckpoint(checkpoint);
+    run.integrator->step(30);
+    // After loading, the bodies are re-fitted to the positions (rounding, ~1e-15 nm); a random
+    // sequence that did not continue would put them some 1e-3 nm apart.
+    double resumed = maxDifference(straight, positionsOf(*run.context));
+    check(resumed < 1e-10, message("a checkpoint does not continue the trajectory: ", resumed, " nm apart"));
+    // A Context with another seed, loading the checkpoint, continues it too: the seed is in it.
+    LangevinRun other = startLangevin(scene, platform, 300.0, 5.0, 0.002, 4);
+    checkpoint.clear();
+    checkpoint.seekg(0);
+    other.context->loadCheckpoint(checkpoint);
+    other.integrator->step(30);
+    double loaded = maxDifference(straight, positionsOf(*other.context));
+    check(loaded < 1e-10, message("a checkpoint loaded into another Context: ", loaded, " nm apart"));
+}
+
+// ------------------------------------------------------------------------------------------------
+// Constraints, bad input
+// ------------------------------------------------------------------------------------------------
+
+/** The mixed system (constrained chain, rigid bodies of every kind, free ion) under noise: rigid bodies, constraints kept. */
+void testConstraintsUnderNoise(Platform& platform) {
+    std::set<std::pair<int, int> > chainConstraints;
+    Scene scene = makeMixed(chainConstraints);
+    const double tolerance = 1e-8;
+    LangevinRun run = startLangevin(scene, platform, 300.0, 10.0, 0.001, 4);
+    run.integrator->setConstraintTolerance(tolerance);
+    run.context->applyConstraints(tolerance);
+    vector<Vec3> start = positionsOf(*run.context);
+    run.integrator->step(300);
+    vector<Vec3> positions = positionsOf(*run.context), velocities = velocitiesOf(*run.context);
+    for (size_t b = 0; b < scene.bodies.size(); b++)
+        for (size_t i = 0; i < scene.bodies[b].size(); i++)
+            for (size_t j = i + 1; j < scene.bodies[b].size(); j++) {
+                int p = scene.bodies[b][i], q = scene.bodies[b][j];
+                Vec3 now = positions[p] - positions[q], then = start[p] - start[q];
+                check(fabs(sqrt(now.dot(now)) - sqrt(then.dot(then))) < rigidityTolerance, message("body ", b, " deformed"));
+            }
+    for (int c = 0; c < scene.system->getNumConstraints(); c++) {
+        int i, j;
+        double length;
+        scene.system->getConstraintParameters(c, i, j, length);
+        Vec3 d = positions[i] - positions[j], dv = velocities[i] - velocities[j];
+        double r = sqrt(d.dot(d));
+        check(fabs(r/length - 1) <= tolerance, message("constraint ", c, ": ", r, " nm, not ", length));
+        check(fabs(d.dot(dv)/r) <= 10*tolerance, message("constraint ", c, ": its length changes at ", d.dot(dv)/r, " nm/ps"));
+    }
+}
+
+void testBadTemperatureAndFriction(Platform& platform) {
+    const double inf = std::numeric_limits<double>::infinity(), nan = std::numeric_limits<double>::quiet_NaN();
+    auto expectError = [](const std::function<void()>& action, const string& word, const string& what) {
+        try {
+            action();
+        }
+        catch (const OpenMMException& e) {
+            check(string(e.what()).find(word) != string::npos, what + ": the message does not name the " + word + ": " + e.what());
+            return;
+        }
+        throw OpenMMException("Assertion failure: " + what + " raised no exception");
+    };
+    for (double bad : {-1.0, -1e-300, inf, -inf, nan}) {
+        expectError([&]() { RigidBodyLangevinIntegrator(bad, 1.0, 0.002); }, "temperature", message("temperature ", bad));
+        expectError([&]() { RigidBodyLangevinIntegrator(300.0, bad, 0.002, {{0}}); }, "friction", message("friction ", bad));
+    }
+    std::unique_ptr<System> system(smallSystem());
+    RigidBodyLangevinIntegrator integrator(300.0, 2.0, 0.002, {{0, 1, 2}, {3, 4}});
+    integrator.setRandomNumberSeed(9);
+    Context context(*system, integrator, platform, platformProperties);
+    context.setPositions(smallPositions);
+    integrator.step(5);
+    for (double bad : {-5.0, inf, nan}) {
+        expectError([&]() { integrator.setTemperature(bad); }, "temperature", message("setTemperature(", bad, ")"));
+        expectError([&]() { integrator.setFriction(bad); }, "friction", message("setFriction(", bad, ")"));
+    }
+    check(integrator.getTemperature() == 300.0 && integrator.getFriction() == 2.0, "bad values leave the settings unchanged");
+    integrator.step(5);
+    for (const Vec3& r : positionsOf(context))
+        check(std::isfinite(r.dot(r)), "the Context works after bad values");
+    integrator.setTemperature(0.0);
+    integrator.setFriction(0.0);
+    integrator.step(2);
+}
+
+// ------------------------------------------------------------------------------------------------
+// RigidBodyIntegrator's thermostat (stochastic velocity rescaling)
+// ------------------------------------------------------------------------------------------------
+
+Run startThermostat(const Scene& scene, Platform& platform, double temperature, double collisionTime, double dt, int seed,
+                    const std::map<string, string>& properties = platformProperties) {
+    Run run;
+    run.integrator.reset(new RigidBodyIntegrator(dt, scene.bodies));
+    run.integrator->setThermostat(temperature, collisionTime);
+    run.integrator->setRandomNumberSeed(seed);
+    run.context.reset(new Context(*scene.system, *run.integrator, platform, properties));
+    run.context->setPositions(scene.positions);
+    run.context->setVelocities(scene.velocities);
+    return run;
+}
+
+/**
+ * Free bodies of every kind and two free atoms, no forces: the free motion keeps the kinetic energy
+ * and the rescaling samples it from the canonical distribution of N_f = getNumDegreesOfFreedom()
+ * degrees of freedom, Gamma(N_f/2, kT), exactly. (Without forces nothing exchanges energy between
+ * the bodies, so only the total is canonical.) dt/tau = 0.5; samples 6 steps apart correlate by
+ * exp(-3) = 0.05.
+ */
+void testThermostatCanonicalKineticEnergy(Platform& platform) {
+    Scene scene = makeCluster(5, 4, 4, 4, false);
+    const double temperature = 300, kT = boltzmann*temperature, dt = 0.002;
+    Run run = startThermostat(scene, platform, temperature, 2*dt, dt, 31);
+    const int dof = run.integrator->getNumDegreesOfFreedom();
+    run.integrator->step(20);
+    vector<double> energies;
+    for (int s = 0; s < 2000; s++) {
+        run.integrator->step(6);
+        energies.push_back(run.context->getState(State::Energy).getKineticEnergy());
+    }
+    double mean, meanError, variance, varianceError;
+    sampleMoments(energies, mean, meanError, variance, varianceError);
+    double expectedMean = 0.5*dof*kT, expectedVariance = 0.5*dof*kT*kT;
+    string report = message("thermostat, free bodies (", dof, " dof): kinetic energy ", mean, " +- ", meanError,
+                            " kJ/mol (expected ", expectedMean, "), variance ", variance, " +- ", varianceError, " (expected ",
+                            expectedVariance, ")");
+    std::cout << report << std::endl;
+    check(fabs(mean - expectedMean) < 5*meanError, report);
+    check(fabs(variance - expectedVariance) < 5*varianceError, report);
+}
+
+/**
+ * The kinetic energy alone, iterated through eq. (A7) with c = 0.5: its stationary distribution is
+ * Gamma(N_f/2, kT) (mean N_f kT/2, variance N_f (kT)^2/2), for N_f = 3 (chi-squared deviates as sums
+ * of squares) and N_f = 200 (Marsaglia-Tsang). Successive values correlate by c, so the standard
+ * errors are those of independent samples times sqrt((1 + c)/(1 - c)) (and for the variance the
+ * square of that factor, (1 + c^2)/(1 - c^2), is used, slightly generous).
+ */
+void testStochasticRescalingRecurrence() {
+    const double kT = 2.5, c = 0.5;
+    for (int dof : {3, 200}) {
+        NormalStream random(77, dof, 0);
+        double kinetic = 0.5*dof*kT, newKinetic;
+        vector<double> samples;
+        for (int i = 0; i < 200000; i++) {
+            stochasticRescalingFactor(kinetic, 0.5*dof*kT, dof, c, random, newKinetic);
+            kinetic = newKinetic;
+            samples.push_back(kinetic);
+        }
+        double mean, meanError, variance, varianceError;
+        sampleMoments(samples, mean, meanError, variance, varianceError);
+        meanError *= sqrt((1 + c)/(1 - c));
+        varianceError *= sqrt((1 + c*c)/(1 - c*c))*sqrt((1 + c)/(1 - c));
+        string report = message("eq. (A7) iterated, ", dof, " dof: mean ", mean, " +- ", meanError, " (expected ", 0.5*dof*kT,
+                                "), variance ", variance, " +- ", varianceError, " (expected ", 0.5*dof*kT*kT, ")");
+        std::cout << report << std::endl;
+        check(fabs(mean - 0.5*dof*kT) < 5*meanError, report);
+        check(fabs(variance - 0.5*dof*kT*kT) < 5*varianceError, report);
+    }
+    // The chi-squared deviates themselves: mean n, variance 2n.
+    for (int n : {7, 32, 33, 150}) {
+        NormalStream random(5, n, 1);
+        vector<double> samples;
+        for (int i = 0; i < 100000; i++)
+            samples.push_back(chiSquaredDeviate(n, random));
+        double mean, meanError, variance, varianceError;
+        sampleMoments(samples, mean, meanError, variance, varianceError);
+        string report = message("chi-squared deviates, n = ", n, ": mean ", mean, " +- ", meanError, ", variance ", variance,
+                                " +- ", varianceError);
+        check(fabs(mean - n) < 5*meanError && fabs(variance - 2*n) < 5*varianceError, report);
+    }
+}
+
+/** At temperature 0 every step scales the kinetic energy by c = exp(-dt/tau) exactly (no forces). */
+void testThermostatDampsAtZeroTemperature(Platform& platform) {
+    Scene scene = makeCluster(3, 3, 3, 3, false);
+    const double dt = 0.002, tau = 0.05;
+    Run run = startThermostat(scene, platform, 0.0, tau, dt, 1);
+    double initial = 0;
+    for (size_t i = 0; i < scene.masses.size(); i++)
+        initial += 0.5*scene.masses[i]*scene.velocities[i].dot(scene.velocities[i]);
+    const int steps = 40;
+    run.integrator->step(steps);
+    double kinetic = run.context->getState(State::Energy).getKineticEnergy(), expected = initial*exp(-steps*dt/tau);
+    check(fabs(kinetic/expected - 1) < 1e-10, message("thermostat at T = 0: kinetic energy ", kinetic, ", expected ", expected));
+    ASSERT_EQUAL_TOL(expected - initial, run.integrator->getThermostatWork(), 1e-10);
+}
+
+/**
+ * Bussi's effective energy, total energy minus the thermostat's work, is conserved as the energy is
+ * by the constant-energy integrator: the interacting cluster starts at 300 K and is thermostatted
+ * at 150 K with tau = 0.02 ps, so the work is large (many times the energy error), and the largest
+ * |H~ - H~(0)| over 0.2 ps at 1 fs stays within twice the energy error of RigidBodyIntegrator
+ * without a thermostat from the same start (Verlet; measured 0.3 times, the cooled cluster moving
+ * more slowly) and falls by about 4 (second order: 3 to 5) at 0.5 fs.
+ */
+void testThermostatEffectiveEnergy(Platform& platform) {
+    Scene scene = makeCluster(7, 3, 3, 2, true);
+    double deviations[2], work = 0;
+    for (int k = 0; k < 2; k++) {
+        const double dt = 0.001/(1 << k);
+        Run run = startThermostat(scene, platform, 150.0, 0.02, dt, 5);
+        const int steps = (int) round(0.2/dt);
+        vector<double> effective;
+        for (int i = 0; i <= steps; i += steps/40) {
+            if (i > 0)
+                run.integrator->step(steps/40);
+            effective.push_back(totalEnergy(*run.context) - run.integrator->getThermostatWork());
+        }
+        deviations[k] = maxDeviation(effective);
+        work = run.integrator->getThermostatWork();
+    }
+    Run verlet = startRigid(scene, platform, 0.001, RigidBodyIntegrator::Exact);
+    vector<double> times, energies;
+    recordEnergies(*verlet.context, *verlet.integrator, 200, 5, times, energies);
+    double verletDeviation = maxDeviation(energies), ratio = deviations[0]/deviations[1];
+    string report = message("thermostat: max |H~ - H~(0)| ", deviations[0], " kJ/mol at 1 fs, ", deviations[1],
+                            " at 0.5 fs (ratio ", ratio, "); work ", work, " kJ/mol; constant energy at 1 fs: ", verletDeviation);
+    std::cout << report << std::endl;
+    check(fabs(work) > 100*deviations[0], report);
+    check(deviations[0] < 2*verletDeviation, report);
+    check(ratio > 3 && ratio < 5, report);
+}
+
+void testThermostatSettings(Platform& platform) {
+    Scene scene = makeCluster(11, 3, 3, 2, true);
+    // Removed before the first step: the constant-energy trajectory, bit for bit.
+    Run plain = startRigid(scene, platform, 0.002, RigidBodyIntegrator::Exact);
+    Run removed = startThermostat(scene, platform, 300.0, 0.1, 0.002, 3);
+    check(removed.integrator->hasThermostat(), "hasThermostat");
+    removed.integrator->removeThermostat();
+    check(!removed.integrator->hasThermostat() && removed.integrator->getThermostatTemperature() == 300.0, "removeThermostat");
+    plain.integrator->step(30);
+    removed.integrator->step(30);
+    check(maxDifference(positionsOf(*plain.context), positionsOf(*removed.context)) == 0.0, "a removed thermostat changes the steps");
+    check(removed.integrator->getThermostatWork() == 0.0, "no work without a thermostat");
+    // Seeds.
+    auto positionsAfter = [&](int seed, const std::map<string, string>& properties) {
+        Run run = startThermostat(scene, platform, 300.0, 0.01, 0.002, seed, properties);
+        run.integrator->step(50);
+        return positionsOf(*run.context);
+    };
+    vector<Vec3> a = positionsAfter(5, platformProperties);
+    check(maxDifference(a, positionsAfter(5, platformProperties)) == 0.0, "thermostat: the same seed gave other positions");
+    check(maxDifference(a, positionsAfter(6, platformProperties)) > 1e-6, "thermostat: seeds 5 and 6 gave the same positions");
+    check(maxDifference(positionsAfter(0, platformProperties), positionsAfter(0, platformProperties)) > 1e-6,
+          "thermostat: two Contexts with seed 0 gave the same positions");
+    if (platform.getName() == "CPU") {
+        Scene many = makeCluster(13, 4, 4, 5, false);
+        vector<Vec3> byThreads[2];
+        for (int k = 0; k < 2; k++) {
+            std::map<string, string> properties = platformProperties;
+            properties["Threads"] = (k == 0 ? "1" : "2");
+            Run run = startThermostat(many, platform, 300.0, 0.01, 0.002, 8, properties);
+            run.integrator->step(30);
+            byThreads[k] = positionsOf(*run.context);
+        }
+        check(maxDifference(byThreads[0], byThreads[1]) == 0.0, "thermostat: 1 and 2 threads gave different trajectories");
+    }
+    // A checkpoint continues the random numbers and keeps the work.
+    Run run = startThermostat(scene, platform, 200.0, 0.01, 0.002, 3);
+    run.integrator->step(20);
+    std::stringstream checkpoint;
+    run.context->createCheckpoint(checkpoint);
+    double work = run.integrator->getThermostatWork();
+    run.integrator->step(30);
+    vector<Vec3> straight = positionsOf(*run.context);
+    double straightWork = run.integrator->getThermostatWork();
+    Run other = startThermostat(scene, platform, 200.0, 0.01, 0.002, 4);
+    other.context->loadCheckpoint(checkpoint);
+    ASSERT_EQUAL_TOL(work, other.integrator->getThermostatWork(), 1e-15);
+    other.integrator->step(30);
+    double resumed = maxDifference(straight, positionsOf(*other.context));
+    check(resumed < 1e-10, message("thermostat: a checkpoint does not continue the trajectory: ", resumed, " nm apart"));
+    ASSERT_EQUAL_TOL(straightWork, other.integrator->getThermostatWork(), 1e-9);
+    // Bad values: an exception naming them, the settings unchanged, the Context usable.
+    const double inf = std::numeric_limits<double>::infinity(), nan = std::numeric_limits<double>::quiet_NaN();
+    vector<std::pair<double, double> > bad = {{-1.0, 0.1}, {nan, 0.1}, {inf, 0.1}, {300.0, 0.0}, {300.0, -0.1}, {300.0, nan}, {300.0, inf}};
+    for (auto& values : bad) {
+        bool threw = false;
+        try {
+            run.integrator->setThermostat(values.first, values.second);
+        }
+        catch (const OpenMMException& e) {
+            threw = string(e.what()).find("thermostat") != string::npos && string(e.what()).find("collision time") != string::npos;
+        }
+        check(threw, message("setThermostat(", values.first, ", ", values.second, ") raised no clear exception"));
+    }
+    check(run.integrator->getThermostatTemperature() == 200.0 && run.integrator->getThermostatCollisionTime() == 0.01,
+          "bad thermostat values leave the settings unchanged");
+    run.integrator->step(5);
+    for (const Vec3& r : positionsOf(*run.context))
+        check(std::isfinite(r.dot(r)), "the Context works after bad thermostat values");
+}
+
+// ------------------------------------------------------------------------------------------------
+
+/** Run every constant-temperature test on platform; print each failure and return the number of failures. */
+int runThermostatTests(Platform& platform) {
+    vector<std::pair<string, std::function<void()> > > tests = {
+        {"Philox4x32-10 known answers and normal deviates", []() { testPhiloxKnownAnswers(); }},
+        {"canonical kinetic energy of free bodies (Exact)", [&]() { testCanonicalKineticEnergy(platform, RigidBodyIntegratorBase::Exact); }},
+        {"canonical kinetic energy of free bodies (NoSquish)", [&]() { testCanonicalKineticEnergy(platform, RigidBodyIntegratorBase::NoSquish); }},
+        {"harmonic trap: BAOAB positions and velocities", [&]() { testHarmonicTrap(platform); }},
+        {"damped at zero temperature", [&]() { testDampedAtZeroTemperature(platform); }},
+        {"friction 0 is the constant-energy step", [&]() { testFrictionZero(platform); }},
+        {"seeds and threads", [&]() { testSeeds(platform); }},
+        {"checkpoint continues the random numbers", [&]() { testCheckpoint(platform); }},
+        {"constraints and rigidity under noise", [&]() { testConstraintsUnderNoise(platform); }},
+        {"bad temperature and friction", [&]() { testBadTemperatureAndFriction(platform); }},
+        {"thermostat: eq. (A7) and chi-squared deviates", []() { testStochasticRescalingRecurrence(); }},
+        {"thermostat: canonical kinetic energy of free bodies", [&]() { testThermostatCanonicalKineticEnergy(platform); }},
+        {"thermostat: damped at zero temperature", [&]() { testThermostatDampsAtZeroTemperature(platform); }},
+        {"thermostat: effective energy conserved", [&]() { testThermostatEffectiveEnergy(platform); }},
+        {"thermostat: removal, seeds, threads, checkpoints, bad values", [&]() { testThermostatSettings(platform); }},
+    };
+    return runTestList(tests);
+}
+
+} // namespace RigidBodyIntegratorTests

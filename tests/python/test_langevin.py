@@ -1,0 +1,405 @@
+"""Tests of openmmrigid.RigidBodyLangevinIntegrator from Python (the C++ tests,
+TestRigidBodyLangevinIntegrator.h, check the exact properties of the step on both platforms):
+
+- a small box of rigid TIP3P water reaches the bath temperature in translation and in rotation,
+  each within 4.5 block standard errors;
+- the kinetic energy of free rigid bodies (no forces) follows the canonical Gamma distribution:
+  Kolmogorov-Smirnov tests of the total and of the rotational energy of single asymmetric and
+  linear bodies;
+- a fixed seed reproduces a trajectory, another seed or seed 0 does not; Simulation checkpoints
+  continue it;
+- friction 0 conserves energy like RigidBodyIntegrator; temperature 0 with friction damps the
+  motion away;
+- bad temperatures and frictions raise openmm.OpenMMException and leave the Context usable;
+- construction from floats and Quantities, the getters' units, pickle, copy, deepcopy,
+  XmlSerializer and deserializeIntegrator keep every setting and give back the right class; the
+  integrator in app.Simulation with StateDataReporter and a MonteCarloBarostat.
+"""
+
+import copy
+import io
+import pickle
+
+import numpy as np
+import openmm
+import openmm.app as app
+import openmm.unit as unit
+import pytest
+from scipy import stats
+
+import openmmrigid
+import systems
+from openmmrigid import RigidBodyIntegrator, RigidBodyIntegratorBase, RigidBodyLangevinIntegrator
+from test_integrator_api import EXPLICIT_BODIES, MASSES, POSITIONS, platform, topology_for, trapped_system
+
+PLATFORMS = ["Reference", "CPU"]
+BOLTZMANN = unit.MOLAR_GAS_CONSTANT_R.value_in_unit(unit.kilojoule_per_mole / unit.kelvin)
+
+
+def settings(integrator):
+    """Every setting a copy must keep."""
+    return (integrator.getTemperature(), integrator.getFriction(), integrator.getRandomNumberSeed(),
+            integrator.getStepSize(), integrator.getConstraintTolerance(), integrator.getIntegrationForceGroups(),
+            integrator.getRotationMethod(), integrator.hasExplicitBodies(), integrator.getExplicitBodies())
+
+
+def configured(bodies):
+    """An integrator with every setting away from its default."""
+    arguments = (310.0, 2.5, 0.0015)
+    integrator = RigidBodyLangevinIntegrator(*arguments, bodies) if bodies is not None else RigidBodyLangevinIntegrator(*arguments)
+    integrator.setRandomNumberSeed(1234)
+    integrator.setConstraintTolerance(3e-7)
+    integrator.setIntegrationForceGroups({0, 2, 5})
+    integrator.setRotationMethod(RigidBodyLangevinIntegrator.NoSquish)
+    return integrator
+
+
+def trapped_context(platformName, integrator):
+    context = openmm.Context(trapped_system(), integrator, platform(platformName))
+    context.setPositions(POSITIONS)
+    context.setVelocitiesToTemperature(300, 1)
+    return context
+
+
+# ------------------------------------------------------------------------------------------------
+# Temperature of rigid water
+# ------------------------------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def small_water_box():
+    """About 100 TIP3P waters (a 1.5 nm box) with a cheap reaction-field cutoff of 0.6 nm and no
+    CMMotionRemover (so that translation and rotation have 3 degrees of freedom per water each),
+    minimised and thermalised at 300 K with LangevinMiddleIntegrator + SETTLE."""
+    forcefield = app.ForceField("amber14/tip3p.xml")
+    modeller = app.Modeller(app.Topology(), [])
+    modeller.addSolvent(forcefield, model="tip3p", boxSize=openmm.Vec3(1.5, 1.5, 1.5) * unit.nanometer)
+    system = forcefield.createSystem(modeller.topology, nonbondedMethod=app.CutoffPeriodic,
+                                     nonbondedCutoff=0.6 * unit.nanometer, rigidWater=True, removeCMMotion=False)
+    thermostat = openmm.LangevinMiddleIntegrator(300 * unit.kelvin, 10 / unit.picosecond, 2 * unit.femtoseconds)
+    thermostat.setRandomNumberSeed(7)
+    context = openmm.Context(system, thermostat, *systems.platform_and_properties("CPU"))
+    context.setPositions(modeller.positions)
+    openmm.LocalEnergyMinimizer.minimize(context, 10.0, 200)
+    context.setVelocitiesToTemperature(300 * unit.kelvin, 7)
+    thermostat.step(500)
+    return system, context.getState(getPositions=True, getVelocities=True)
+
+
+def block_mean(samples, blocks=20):
+    """The mean of the samples and its standard error from the means of consecutive blocks."""
+    samples = np.asarray(samples)
+    means = samples[:len(samples) // blocks * blocks].reshape(blocks, -1).mean(axis=1)
+    return samples.mean(), means.std(ddof=1) / np.sqrt(blocks)
+
+
+def test_water_reaches_the_bath_temperature(small_water_box):
+    """The mean translational and rotational temperatures, each from its own kinetic energy and its
+    3 N degrees of freedom, are 300 K within 4.5 standard errors of 20 block means (10 ps at 1 fs;
+    friction 50/ps decorrelates the kinetic energy within a few tens of fs, so the blocks of 0.5 ps
+    are independent). At 1 fs the on-step velocities of BAOAB read the rotational temperature low
+    by about 0.3 % (see README), about one standard error, well inside the bound; at 2 fs that bias
+    (1 to 1.5 %) would be several. The error itself must be small enough for the test to mean
+    something: below 1 % of the target."""
+    system, state = small_water_box
+    target = 300.0
+    integrator = RigidBodyLangevinIntegrator(target * unit.kelvin, 50 / unit.picosecond, 1 * unit.femtoseconds)
+    integrator.setRandomNumberSeed(11)
+    context = openmm.Context(system, integrator, *systems.platform_and_properties("CPU"))
+    context.setState(state)
+    integrator.step(1000)
+    numWaters = integrator.getNumBodies()
+    assert numWaters == system.getNumParticles() // 3 and integrator.getNumDegreesOfFreedom() == 6 * numWaters
+    translational, rotational = [], []
+    for _ in range(5000):
+        integrator.step(2)
+        translational.append(integrator.getTranslationalKineticEnergy().value_in_unit(unit.kilojoule_per_mole))
+        rotational.append(integrator.getRotationalKineticEnergy().value_in_unit(unit.kilojoule_per_mole))
+    for name, energies in (("translational", translational), ("rotational", rotational)):
+        temperatures = 2 * np.asarray(energies) / (3 * numWaters * BOLTZMANN)
+        mean, error = block_mean(temperatures)
+        print(f"{name} temperature: {mean:.2f} +- {error:.2f} K ({numWaters} waters)")
+        assert error < 0.01 * target
+        assert abs(mean - target) < 4.5 * error, f"{name} temperature {mean:.2f} +- {error:.2f} K, not {target} K"
+
+
+# ------------------------------------------------------------------------------------------------
+# The canonical distribution of the kinetic energy
+# ------------------------------------------------------------------------------------------------
+
+def test_kinetic_energy_distribution_is_canonical():
+    """Free bodies of every kind and free atoms without forces: the free motion keeps each body's
+    kinetic energy and the Ornstein-Uhlenbeck step keeps the canonical momenta, so the total kinetic
+    energy is Gamma(dof/2, kT) distributed (dof = getNumDegreesOfFreedom()), the rotational energy of
+    an asymmetric body Gamma(3/2, kT) and of a linear body Gamma(1, kT), exactly. Samples are 4 steps
+    apart at friction dt = 0.5 (correlation of the energy c^8 = 0.02: independent), the rotational
+    ones pooled over bodies of a kind. Kolmogorov-Smirnov at the 0.1 % level (fixed seed); a noise
+    amplitude off by a few percent fails it."""
+    cluster = systems.cluster(seed=4, grid=(3, 3, 3), forces=False)
+    temperature, dt = 300.0, 0.002
+    kT = BOLTZMANN * temperature
+    integrator = RigidBodyLangevinIntegrator(temperature, 0.5 / dt, dt, cluster.bodies)
+    integrator.setRandomNumberSeed(21)
+    context = systems.make_context(cluster.system, integrator, "Reference")
+    context.setPositions(cluster.positions)
+    context.setVelocities(cluster.velocities)
+    integrator.step(10)
+    dof = integrator.getNumDegreesOfFreedom()
+    kinds = [integrator.getBodyKind(b) for b in range(integrator.getNumBodies())]
+    total, rotational = [], {"asymmetric": [], "linear": []}
+    for _ in range(1500):
+        integrator.step(4)
+        velocities = systems.velocities_of(context)
+        total.append(0.5 * np.sum(cluster.masses[:, None] * velocities**2))
+        for body, kind in zip(cluster.bodies, kinds):
+            if kind in rotational:
+                masses, v = cluster.masses[body], velocities[body]
+                relative = v - masses @ v / masses.sum()
+                rotational[kind].append(0.5 * np.sum(masses[:, None] * relative**2))
+    checks = [("total", total, dof / 2), ("asymmetric rotation", rotational["asymmetric"], 1.5),
+              ("linear rotation", rotational["linear"], 1.0)]
+    for name, energies, shape in checks:
+        result = stats.kstest(energies, stats.gamma(shape, scale=kT).cdf)
+        print(f"{name}: {len(energies)} samples, mean {np.mean(energies):.4f} (expected {shape * kT:.4f}) kJ/mol, "
+              f"KS p = {result.pvalue:.3g}")
+        assert result.pvalue > 1e-3, f"{name}: KS p-value {result.pvalue:.3g}"
+
+
+# ------------------------------------------------------------------------------------------------
+# Seeds, checkpoints, limits of friction and temperature
+# ------------------------------------------------------------------------------------------------
+
+def run_positions(platformName, seed, steps=30, friction=5.0):
+    integrator = RigidBodyLangevinIntegrator(300.0, friction, 0.001, EXPLICIT_BODIES)
+    integrator.setRandomNumberSeed(seed)
+    context = trapped_context(platformName, integrator)
+    integrator.step(steps)
+    return systems.positions_of(context)
+
+
+@pytest.mark.parametrize("platformName", PLATFORMS)
+def test_seeds(platformName):
+    same = run_positions(platformName, 17), run_positions(platformName, 17)
+    assert np.array_equal(*same)
+    assert np.abs(same[0] - run_positions(platformName, 18)).max() > 1e-5
+    assert np.abs(run_positions(platformName, 0) - run_positions(platformName, 0)).max() > 1e-5
+    # Friction 0 draws nothing: the seed does not matter.
+    assert np.array_equal(run_positions(platformName, 1, friction=0.0), run_positions(platformName, 2, friction=0.0))
+
+
+@pytest.mark.parametrize("platformName", PLATFORMS)
+def test_simulation_checkpoint_continues(platformName):
+    integrator = RigidBodyLangevinIntegrator(300.0, 5.0, 0.001, EXPLICIT_BODIES)
+    integrator.setRandomNumberSeed(3)
+    simulation = app.Simulation(topology_for(len(MASSES)), trapped_system(), integrator, platform(platformName))
+    simulation.context.setPositions(POSITIONS)
+    simulation.context.setVelocitiesToTemperature(300, 3)
+    simulation.step(10)
+    checkpoint = io.BytesIO()
+    simulation.saveCheckpoint(checkpoint)
+    simulation.step(20)
+    expected = systems.positions_of(simulation.context)
+    checkpoint.seek(0)
+    simulation.loadCheckpoint(checkpoint)
+    simulation.step(20)
+    # Loading re-fits the bodies to the positions (rounding); other random numbers would differ by far more.
+    assert np.abs(systems.positions_of(simulation.context) - expected).max() < 1e-10
+
+
+def test_friction_zero_conserves_energy_like_the_constant_energy_integrator():
+    """Friction 0: kick, half drift, half drift, kick. In a water box its energy fluctuates as
+    RigidBodyIntegrator's does (within 20 %; the two drifts compose to Verlet's one, to rounding,
+    but the rounding grows in the chaotic liquid) and drifts no more, within three combined standard
+    errors of slopes through block means."""
+    box = systems.water_box("tip3p", size=1.5, seed=3)
+    results = {}
+    for name, integrator in (("langevin", RigidBodyLangevinIntegrator(300.0, 0.0, 0.002)),
+                             ("verlet", RigidBodyIntegrator(0.002))):
+        context = systems.make_context(box.system, integrator, "CPU")
+        context.setPositions(box.positions)
+        context.setVelocities(box.velocities)
+        times, energies = systems.run_energies(context, integrator, 500, 5)
+        rms = systems.energy_drift(times, energies)[2]
+        results[name] = systems.block_drift(times, energies, 5) + (rms,)
+    (slope, error, rms), (verletSlope, verletError, verletRms) = results["langevin"], results["verlet"]
+    print(f"friction 0: drift {slope:.3f} +- {error:.3f} kJ/mol/ps, rms {rms:.4f} kJ/mol; RigidBodyIntegrator: "
+          f"{verletSlope:.3f} +- {verletError:.3f}, {verletRms:.4f}")
+    assert rms == pytest.approx(verletRms, rel=0.2)
+    assert abs(slope) <= abs(verletSlope) + 3 * np.hypot(error, verletError)
+
+
+def test_zero_temperature_damps_the_motion():
+    """Temperature 0 and friction 20/ps: in 1 ps the water box falls from 300 K to below 1 K. (It then
+    stays at a few tenths of a kelvin: the CPU platform's single-precision forces are a small noise.)"""
+    box = systems.water_box("tip3p", size=1.5, seed=3)
+    integrator = RigidBodyLangevinIntegrator(0.0, 20.0, 0.002)
+    context = systems.make_context(box.system, integrator, "CPU")
+    context.setPositions(box.positions)
+    context.setVelocities(box.velocities)
+    integrator.step(1)
+    start = integrator.computeSystemTemperature().value_in_unit(unit.kelvin)
+    integrator.step(500)
+    end = integrator.computeSystemTemperature().value_in_unit(unit.kelvin)
+    print(f"T = 0: temperature {start:.1f} K -> {end:.3g} K in 1 ps")
+    assert start > 250 and end < 1.0
+
+
+@pytest.mark.parametrize("platformName", PLATFORMS)
+def test_bad_values_leave_a_usable_context(platformName):
+    for bad in (-1.0, float("nan"), float("inf")):
+        with pytest.raises(openmm.OpenMMException, match="temperature"):
+            RigidBodyLangevinIntegrator(bad, 1.0, 0.001)
+        with pytest.raises(openmm.OpenMMException, match="friction"):
+            RigidBodyLangevinIntegrator(300.0, bad, 0.001, EXPLICIT_BODIES)
+    with pytest.raises(openmm.OpenMMException, match=r"temperature.*-5"):
+        RigidBodyLangevinIntegrator(-5 * unit.kelvin, 1.0, 0.001)
+    integrator = RigidBodyLangevinIntegrator(300.0, 2.0, 0.001, EXPLICIT_BODIES)
+    context = trapped_context(platformName, integrator)
+    integrator.step(5)
+    with pytest.raises(openmm.OpenMMException, match=r"temperature.*-3"):
+        integrator.setTemperature(-3.0)
+    with pytest.raises(openmm.OpenMMException, match=r"friction.*nan"):
+        integrator.setFriction(float("nan"))
+    with pytest.raises(openmm.OpenMMException, match="friction"):
+        integrator.setFriction(-1 / unit.picosecond)
+    assert integrator.getTemperature() == 300.0 * unit.kelvin
+    assert integrator.getFriction() == 2.0 / unit.picosecond
+    integrator.step(5)
+    assert np.all(np.isfinite(systems.positions_of(context)))
+    assert 0 < integrator.computeSystemTemperature().value_in_unit(unit.kelvin) < 1e4
+
+
+# ------------------------------------------------------------------------------------------------
+# Construction, settings and copies
+# ------------------------------------------------------------------------------------------------
+
+def test_classes():
+    integrator = RigidBodyLangevinIntegrator(300, 1, 0.002)
+    assert isinstance(integrator, openmm.Integrator) and isinstance(integrator, RigidBodyIntegratorBase)
+    assert not isinstance(integrator, RigidBodyIntegrator)
+    assert isinstance(RigidBodyIntegrator(0.002), RigidBodyIntegratorBase)
+    for name in ("RigidBodyLangevinIntegrator", "RigidBodyIntegratorBase"):
+        assert name in openmmrigid.__all__ and hasattr(openmmrigid, name)
+    assert RigidBodyLangevinIntegrator.Exact == RigidBodyIntegrator.Exact == 0
+    assert RigidBodyLangevinIntegrator.NoSquish == RigidBodyIntegrator.NoSquish == 1
+    assert not hasattr(integrator, "setSplitting")
+
+
+@pytest.mark.parametrize("arguments", [
+    (300, 1, 0.002),
+    (300 * unit.kelvin, 1 / unit.picosecond, 2 * unit.femtoseconds),
+    (300 * unit.kelvin, 0.001 / unit.femtosecond, 0.002 * unit.picosecond),
+])
+def test_units(arguments):
+    for integrator in (RigidBodyLangevinIntegrator(*arguments), RigidBodyLangevinIntegrator(*arguments, [[0, 1]])):
+        assert integrator.getTemperature() == 300 * unit.kelvin
+        assert integrator.getFriction().value_in_unit(unit.picosecond**-1) == pytest.approx(1.0)
+        assert integrator.getStepSize().value_in_unit(unit.picosecond) == pytest.approx(0.002)
+        assert integrator.getRandomNumberSeed() == 0 and integrator.getRotationMethod() == RigidBodyLangevinIntegrator.Exact
+    integrator = RigidBodyLangevinIntegrator(300, 1, 0.002)
+    integrator.setTemperature(77 * unit.kelvin)
+    integrator.setFriction(0.5 / unit.femtosecond)
+    assert integrator.getTemperature() == 77 * unit.kelvin
+    assert integrator.getFriction().value_in_unit(unit.picosecond**-1) == pytest.approx(500.0)
+    with pytest.raises(TypeError):
+        integrator.setFriction(1 * unit.picosecond)  # not a rate
+    with pytest.raises(TypeError):
+        RigidBodyLangevinIntegrator(300 * unit.nanometer, 1, 0.002)
+
+
+def test_docstrings():
+    for name in ("getTemperature", "setTemperature", "getFriction", "setFriction", "setRandomNumberSeed"):
+        assert getattr(RigidBodyLangevinIntegrator, name).__doc__
+    assert "Davidchack" in RigidBodyLangevinIntegrator.__doc__ and "BAOAB" in RigidBodyLangevinIntegrator.__doc__
+    assert "kJ/mol" in RigidBodyLangevinIntegrator.getRotationalKineticEnergy.__doc__
+
+
+BODY_CHOICES = {"found": None, "explicit": EXPLICIT_BODIES, "none": []}
+
+
+@pytest.mark.parametrize("choice", BODY_CHOICES)
+@pytest.mark.parametrize("method", ["pickle", "copy", "deepcopy", "xml", "clone", "deserializeIntegrator"])
+def test_copies_keep_every_setting(choice, method):
+    original = configured(BODY_CHOICES[choice])
+    if method == "pickle":
+        duplicate = pickle.loads(pickle.dumps(original))
+    elif method == "copy":
+        duplicate = copy.copy(original)
+    elif method == "deepcopy":
+        duplicate = copy.deepcopy(original)
+    elif method == "xml":
+        duplicate = openmm.XmlSerializer.deserialize(openmm.XmlSerializer.serialize(original))
+    elif method == "clone":
+        duplicate = openmm.XmlSerializer.clone(original)
+    else:
+        duplicate = openmmrigid.deserializeIntegrator(openmm.XmlSerializer.serialize(original))
+    assert type(duplicate) is RigidBodyLangevinIntegrator
+    assert duplicate.thisown
+    expected = settings(original)
+    del original  # the copy owns its own C++ object
+    assert settings(duplicate) == expected
+    assert duplicate.getTemperature() == 310 * unit.kelvin and duplicate.getRandomNumberSeed() == 1234
+
+
+def test_xml_format_and_versions():
+    xml = openmm.XmlSerializer.serialize(configured([[0, 1, 2], [3]]))
+    assert 'type="RigidBodyLangevinIntegrator"' in xml and 'version="1"' in xml
+    for attribute in ("temperature", "friction", "randomSeed", "stepSize", "constraintTolerance",
+                      "integrationForceGroups", "rotationMethod", "explicitBodies"):
+        assert attribute + "=" in xml
+    minimal = ('<?xml version="1.0" ?>\n<Integrator temperature="250" friction="3" stepSize=".004" '
+               'type="RigidBodyLangevinIntegrator" version="1"/>\n')
+    integrator = openmm.XmlSerializer.deserialize(minimal)
+    assert type(integrator) is RigidBodyLangevinIntegrator
+    assert settings(integrator) == settings(RigidBodyLangevinIntegrator(250, 3, 0.004))
+    for bad, words in (('version="2"', "version"), ('version="1" rotationMethod="4"', "rotation method")):
+        text = ('<?xml version="1.0" ?>\n<Integrator temperature="250" friction="3" stepSize=".004" '
+                f'type="RigidBodyLangevinIntegrator" {bad}/>\n')
+        with pytest.raises(openmm.OpenMMException, match=words):
+            openmm.XmlSerializer.deserialize(text)
+    negative = minimal.replace('friction="3"', 'friction="-3"')
+    with pytest.raises(openmm.OpenMMException, match="friction"):
+        openmm.XmlSerializer.deserialize(negative)
+    with pytest.raises(openmm.OpenMMException):
+        openmm.XmlSerializer.deserialize(minimal.replace(' temperature="250"', ""))
+    # A RigidBodyLangevinIntegrator is not a RigidBodyIntegrator: pickled states do not cross over.
+    plain = RigidBodyIntegrator.__new__(RigidBodyIntegrator)
+    with pytest.raises(openmm.OpenMMException, match="RigidBodyLangevinIntegrator"):
+        plain.__setstate__(openmm.XmlSerializer.serialize(configured(None)))
+
+
+# ------------------------------------------------------------------------------------------------
+# With app.Simulation
+# ------------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("platformName", PLATFORMS)
+def test_simulation_and_reporter(platformName):
+    integrator = RigidBodyLangevinIntegrator(300, 10, 0.001, EXPLICIT_BODIES)
+    simulation = app.Simulation(topology_for(len(MASSES)), trapped_system(), integrator, platform(platformName))
+    simulation.context.setPositions(POSITIONS)
+    output = io.StringIO()
+    simulation.reporters.append(app.StateDataReporter(output, 5, step=True, temperature=True))
+    simulation.step(10)
+    reported = float(output.getvalue().splitlines()[-1].split(",")[1])
+    assert reported == pytest.approx(integrator.computeSystemTemperature().value_in_unit(unit.kelvin), rel=1e-6)
+    assert integrator.getNumBodies() == len(EXPLICIT_BODIES)
+    assert [integrator.getBodyKind(b) for b in range(4)] == ["asymmetric", "linear", "point", "asymmetric"]
+
+
+def test_barostat_keeps_bodies_rigid():
+    """MonteCarloBarostat moves (which scale the molecules' centres) with the Langevin integrator."""
+    box = systems.water_box("tip3p", size=1.5, seed=3)
+    system = openmm.XmlSerializer.deserialize(openmm.XmlSerializer.serialize(box.system))
+    system.addForce(openmm.MonteCarloBarostat(1 * unit.bar, 300 * unit.kelvin, 5))
+    integrator = RigidBodyLangevinIntegrator(300, 5, 0.002)
+    integrator.setRandomNumberSeed(2)
+    context = systems.make_context(system, integrator, "CPU")
+    context.setPositions(box.positions)
+    context.setVelocities(box.velocities)
+    volume = context.getState().getPeriodicBoxVolume()
+    integrator.step(300)
+    assert context.getState().getPeriodicBoxVolume() != volume
+    positions = systems.positions_of(context)
+    # Rigid to rounding: each water keeps the shape its constraints give it.
+    for c in range(system.getNumConstraints()):
+        i, j, length = system.getConstraintParameters(c)
+        assert np.linalg.norm(positions[i] - positions[j]) == pytest.approx(length.value_in_unit(unit.nanometer), abs=1e-12)
