@@ -83,6 +83,7 @@ import os
 import platform as pyplatform
 import shlex
 import sys
+import textwrap
 import time
 from pathlib import Path
 from typing import Callable
@@ -537,8 +538,10 @@ def seriesOf(rows, model, name):
 
 
 def panels(args, title):
-    figure, axes = plt.subplots(1, len(args.models), figsize=(4.2*len(args.models), 3.8), squeeze=False, sharey=True)
-    figure.suptitle(title, fontsize=9)
+    width = 4.2*len(args.models)
+    figure, axes = plt.subplots(1, len(args.models), figsize=(width, 3.8 + 0.15*(len(title)//int(14*width))),
+                                squeeze=False, sharey=True)
+    figure.suptitle(textwrap.fill(title, int(14*width)), fontsize=9)
     return figure, axes[0]
 
 
