@@ -47,6 +47,7 @@ import openmm
 from openmm import app, unit
 
 import openmmrigid
+from reporting import openLog, say, stamp
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402 (after choosing the backend)
@@ -62,20 +63,6 @@ FRAME_EVERY = 0.2      # ps
 RDF_MAX, RDF_BIN = 1.0, 0.005   # nm
 AMU_PER_NM3_IN_G_PER_ML = 1.66053906660e-24/1e-21
 BOLTZMANN = unit.MOLAR_GAS_CONSTANT_R.value_in_unit(unit.kilojoule_per_mole/unit.kelvin)
-LOG = None
-
-
-def say(text=""):
-    """Print a line and copy it to the log file, flushing both (progress shows while it runs)."""
-    print(text, flush=True)
-    if LOG is not None:
-        LOG.write(text + "\n")
-        LOG.flush()
-
-
-def progress(text):
-    say(f"[{datetime.datetime.now():%H:%M:%S}] {text}")
-
 
 # ---------------------------------------------------------------------------------------------------
 # The box
@@ -225,7 +212,6 @@ def firstPeak(radii, g):
 # ---------------------------------------------------------------------------------------------------
 
 def main():
-    global LOG
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--quick", action="store_true", help="8 ps per run instead of 60 (2 to 3 minutes)")
     parser.add_argument("--molecules", type=int, default=500, help="approximate number of waters (default 500)")
@@ -237,7 +223,7 @@ def main():
     equilibrate, production, blocks, initial, initialStep = (2.0, 8.0, 5, 10.0, 4) if args.quick else (5.0, 60.0, 10, 20.0, 2)
 
     RESULTS.mkdir(parents=True, exist_ok=True)
-    LOG = open(RESULTS/"thermostat_comparison.log", "w")
+    openLog(RESULTS/"thermostat_comparison.log")
     platform = openmm.Platform.getPlatformByName(args.platform)
     threads = platform.getPropertyDefaultValue("Threads") if args.platform == "CPU" else "-"
     say(f"thermostat_comparison.py{' --quick' if args.quick else ''}: {datetime.datetime.now():%Y-%m-%d %H:%M}, "
@@ -249,14 +235,14 @@ def main():
     say(f"{molecules.count} TIP4P-Ew waters, PME, MonteCarloBarostat (1 bar, every {BAROSTAT_INTERVAL} steps), "
         f"300 K, friction 1/ps; each run: {equilibrate:g} ps discarded, {production:g} ps sampled; "
         f"errors from {blocks} block means")
-    progress(f"minimizing and equilibrating {initial:g} ps with LangevinMiddleIntegrator + SETTLE at {initialStep} fs")
+    stamp(f"minimizing and equilibrating {initial:g} ps with LangevinMiddleIntegrator + SETTLE at {initialStep} fs")
     state = equilibratedState(system, modeller.positions, platform, initial, initialStep)
 
     runs = []
     names = {"rigid": "RigidBodyLangevinIntegrator (Exact)", "stock": "LangevinMiddleIntegrator + SETTLE"}
     for stepFs in (2, 4):
         for kind in ("rigid", "stock"):
-            progress(f"{names[kind]} at {stepFs} fs")
+            stamp(f"{names[kind]} at {stepFs} fs")
             data, frames, boxes, msPerStep = simulate(system, state, molecules, platform, kind, stepFs, equilibrate,
                                                       production, seed=100 + stepFs)
             radii, g = radialDistribution(frames, boxes)

@@ -517,3 +517,30 @@ def positions_of(context):
 def velocities_of(context):
     return context.getState(getVelocities=True).getVelocities(asNumpy=True).value_in_unit(
         unit.nanometer / unit.picosecond)
+
+
+# ------------------------------------------------------------------------------------------------
+# Copies of an integrator, every way a user can make one
+# ------------------------------------------------------------------------------------------------
+
+COPY_METHODS = ["pickle", "copy", "deepcopy", "xml", "clone", "deserializeIntegrator"]
+
+
+def copy_integrator(integrator, method):
+    """A copy of the integrator made by `method`, one of COPY_METHODS."""
+    import copy
+    import pickle
+    import openmmrigid
+    if method == "pickle":
+        return pickle.loads(pickle.dumps(integrator))
+    if method == "copy":
+        return copy.copy(integrator)
+    if method == "deepcopy":
+        return copy.deepcopy(integrator)
+    if method == "xml":
+        return openmm.XmlSerializer.deserialize(openmm.XmlSerializer.serialize(integrator))
+    if method == "clone":
+        return openmm.XmlSerializer.clone(integrator)
+    if method == "deserializeIntegrator":
+        return openmmrigid.deserializeIntegrator(openmm.XmlSerializer.serialize(integrator))
+    raise ValueError(f"unknown copy method {method!r}; expected one of {COPY_METHODS}")

@@ -15,7 +15,6 @@
 import copy
 import io
 import os
-import pickle
 
 import numpy as np
 import openmm
@@ -25,6 +24,7 @@ import pytest
 
 import openmmrigid
 from openmmrigid import RigidBodyIntegrator, RigidStateDataReporter
+from systems import COPY_METHODS, copy_integrator
 
 PLATFORMS = ["Reference", "CPU"]
 GAS_CONSTANT = unit.MOLAR_GAS_CONSTANT_R.value_in_unit(unit.kilojoule_per_mole / unit.kelvin)
@@ -242,21 +242,10 @@ BODY_CHOICES = {"found": None, "explicit": EXPLICIT_BODIES, "none": []}
 
 
 @pytest.mark.parametrize("choice", BODY_CHOICES)
-@pytest.mark.parametrize("method", ["pickle", "copy", "deepcopy", "xml", "clone", "deserializeIntegrator"])
+@pytest.mark.parametrize("method", COPY_METHODS)
 def test_copies_keep_every_setting(choice, method):
     original = configured(BODY_CHOICES[choice])
-    if method == "pickle":
-        duplicate = pickle.loads(pickle.dumps(original))
-    elif method == "copy":
-        duplicate = copy.copy(original)
-    elif method == "deepcopy":
-        duplicate = copy.deepcopy(original)
-    elif method == "xml":
-        duplicate = openmm.XmlSerializer.deserialize(openmm.XmlSerializer.serialize(original))
-    elif method == "clone":
-        duplicate = openmm.XmlSerializer.clone(original)
-    else:
-        duplicate = openmmrigid.deserializeIntegrator(openmm.XmlSerializer.serialize(original))
+    duplicate = copy_integrator(original, method)
     assert type(duplicate) is RigidBodyIntegrator
     assert duplicate.thisown
     assert settings(duplicate) == settings(original)

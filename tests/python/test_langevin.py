@@ -16,9 +16,7 @@ TestRigidBodyLangevinIntegrator.h, check the exact properties of the step on bot
   integrator in app.Simulation with StateDataReporter and a MonteCarloBarostat.
 """
 
-import copy
 import io
-import pickle
 
 import numpy as np
 import openmm
@@ -29,6 +27,7 @@ from scipy import stats
 
 import openmmrigid
 import systems
+from systems import COPY_METHODS, copy_integrator
 from openmmrigid import RigidBodyIntegrator, RigidBodyIntegratorBase, RigidBodyLangevinIntegrator
 from test_integrator_api import EXPLICIT_BODIES, MASSES, POSITIONS, platform, topology_for, trapped_system
 
@@ -317,21 +316,10 @@ BODY_CHOICES = {"found": None, "explicit": EXPLICIT_BODIES, "none": []}
 
 
 @pytest.mark.parametrize("choice", BODY_CHOICES)
-@pytest.mark.parametrize("method", ["pickle", "copy", "deepcopy", "xml", "clone", "deserializeIntegrator"])
+@pytest.mark.parametrize("method", COPY_METHODS)
 def test_copies_keep_every_setting(choice, method):
     original = configured(BODY_CHOICES[choice])
-    if method == "pickle":
-        duplicate = pickle.loads(pickle.dumps(original))
-    elif method == "copy":
-        duplicate = copy.copy(original)
-    elif method == "deepcopy":
-        duplicate = copy.deepcopy(original)
-    elif method == "xml":
-        duplicate = openmm.XmlSerializer.deserialize(openmm.XmlSerializer.serialize(original))
-    elif method == "clone":
-        duplicate = openmm.XmlSerializer.clone(original)
-    else:
-        duplicate = openmmrigid.deserializeIntegrator(openmm.XmlSerializer.serialize(original))
+    duplicate = copy_integrator(original, method)
     assert type(duplicate) is RigidBodyLangevinIntegrator
     assert duplicate.thisown
     expected = settings(original)

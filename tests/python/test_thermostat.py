@@ -13,9 +13,7 @@ order, seeds, threads and checkpoints on both platforms.
   read as no thermostat, and the work kept by Simulation checkpoints.
 """
 
-import copy
 import io
-import pickle
 
 import numpy as np
 import openmm
@@ -25,6 +23,7 @@ import pytest
 from scipy import stats
 
 import systems
+from systems import COPY_METHODS, copy_integrator
 from openmmrigid import RigidBodyIntegrator
 from test_integrator_api import EXPLICIT_BODIES, MASSES, POSITIONS, platform, topology_for, trapped_system
 from test_langevin import BOLTZMANN, block_mean, small_water_box  # noqa: F401 (small_water_box is a fixture)
@@ -150,19 +149,10 @@ def test_settings_and_units():
     assert "Bussi" in RigidBodyIntegrator.setThermostat.__doc__
 
 
-@pytest.mark.parametrize("method", ["pickle", "copy", "deepcopy", "xml", "clone"])
+@pytest.mark.parametrize("method", COPY_METHODS)
 def test_copies_keep_the_thermostat(method):
     original = thermostatted(0.002, 280.0, 0.25, EXPLICIT_BODIES, seed=99)
-    if method == "pickle":
-        duplicate = pickle.loads(pickle.dumps(original))
-    elif method == "copy":
-        duplicate = copy.copy(original)
-    elif method == "deepcopy":
-        duplicate = copy.deepcopy(original)
-    elif method == "xml":
-        duplicate = openmm.XmlSerializer.deserialize(openmm.XmlSerializer.serialize(original))
-    else:
-        duplicate = openmm.XmlSerializer.clone(original)
+    duplicate = copy_integrator(original, method)
     assert type(duplicate) is RigidBodyIntegrator
     assert duplicate.hasThermostat() and duplicate.getRandomNumberSeed() == 99
     assert duplicate.getThermostatTemperature() == 280 * unit.kelvin
