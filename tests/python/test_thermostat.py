@@ -39,7 +39,9 @@ def thermostatted(stepSize, temperature=300.0, collisionTime=0.1, bodies=None, s
 def test_water_reaches_the_bath_temperature(small_water_box):  # noqa: F811 (the fixture)
     """The thermostat controls the total kinetic energy; the dynamics shares it between translation
     and rotation. Each of their mean temperatures (3 N degrees of freedom each) is 300 K within 4.5
-    standard errors of 12 block means of 2 ps (24 ps at 2 fs, tau = 0.1 ps), and the error is below 1 %."""
+    standard errors of 12 block means of 4 ps (48 ps at 2 fs, tau = 0.1 ps), and the error is below 1 %.
+    (The block error itself scatters from run to run, since CPU forces are not bitwise repeatable: 2.0
+    to 3.2 K over 24 ps; 48 ps keeps it below the 3 K that makes a 5 % bias fail the test.)"""
     system, state = small_water_box
     target = 300.0
     integrator = thermostatted(2 * unit.femtoseconds, target * unit.kelvin, 0.1 * unit.picosecond, seed=13)
@@ -48,7 +50,7 @@ def test_water_reaches_the_bath_temperature(small_water_box):  # noqa: F811 (the
     integrator.step(500)
     numWaters = integrator.getNumBodies()
     translational, rotational = [], []
-    for _ in range(3000):
+    for _ in range(6000):
         integrator.step(4)
         translational.append(integrator.getTranslationalKineticEnergy().value_in_unit(unit.kilojoule_per_mole))
         rotational.append(integrator.getRotationalKineticEnergy().value_in_unit(unit.kilojoule_per_mole))
