@@ -889,6 +889,33 @@ void testWaterEnergy(Platform& platform, bool fourSite, RigidBodyIntegrator::Rot
 // ------------------------------------------------------------------------------------------------
 
 /**
+ * The bodies kept their shape since `start` (every intra-body distance to rigidityTolerance) and the
+ * constraints among free particles hold, in length and in rate of change, to `tolerance`.
+ */
+void checkRigidAndConstrained(const Scene& scene, const vector<Vec3>& start, const vector<Vec3>& positions,
+                              const vector<Vec3>& velocities, double tolerance) {
+    for (size_t b = 0; b < scene.bodies.size(); b++) {
+        const vector<int>& body = scene.bodies[b];
+        for (size_t i = 0; i < body.size(); i++)
+            for (size_t j = i + 1; j < body.size(); j++) {
+                Vec3 now = positions[body[i]] - positions[body[j]], then = start[body[i]] - start[body[j]];
+                double change = fabs(sqrt(now.dot(now)) - sqrt(then.dot(then)));
+                check(change < rigidityTolerance, message("body ", b, ": the distance ", body[i], "-", body[j],
+                      " changed by ", change, " nm"));
+            }
+    }
+    for (int c = 0; c < scene.system->getNumConstraints(); c++) {
+        int i, j;
+        double length;
+        scene.system->getConstraintParameters(c, i, j, length);
+        Vec3 d = positions[i] - positions[j], dv = velocities[i] - velocities[j];
+        double r = sqrt(d.dot(d));
+        check(fabs(r/length - 1) <= tolerance, message("constraint ", c, ": ", r, " nm, not ", length));
+        check(fabs(d.dot(dv)/r) <= 10*tolerance, message("constraint ", c, ": its length changes at ", d.dot(dv)/r, " nm/ps"));
+    }
+}
+
+/**
  * An isolated cluster: a flexible four-carbon chain with one hydrogen per carbon (harmonic bonds,
  * angles and torsions; C-H bonds constrained, as HBonds does), rigid waters, a rigid benzene, a
  * rigid CO2, a Na+ body and a free Cl-.
@@ -976,26 +1003,7 @@ void testMixedSystem(Platform& platform, RigidBodyIntegrator::Splitting splittin
         recordEnergies(*run.context, *run.integrator, steps, steps/50, times, energies);
         deviations[k] = maxDeviation(energies);
         kinetic = run.context->getState(State::Energy).getKineticEnergy();
-        vector<Vec3> positions = positionsOf(*run.context), velocities = velocitiesOf(*run.context);
-        for (size_t b = 0; b < scene.bodies.size(); b++) {
-            const vector<int>& body = scene.bodies[b];
-            for (size_t i = 0; i < body.size(); i++)
-                for (size_t j = i + 1; j < body.size(); j++) {
-                    Vec3 now = positions[body[i]] - positions[body[j]], then = start[body[i]] - start[body[j]];
-                    double change = fabs(sqrt(now.dot(now)) - sqrt(then.dot(then)));
-                    check(change < rigidityTolerance, message("body ", b, ": the distance ", body[i], "-", body[j],
-                          " changed by ", change, " nm"));
-                }
-        }
-        for (int c = 0; c < scene.system->getNumConstraints(); c++) {
-            int i, j;
-            double length;
-            scene.system->getConstraintParameters(c, i, j, length);
-            Vec3 d = positions[i] - positions[j], dv = velocities[i] - velocities[j];
-            double r = sqrt(d.dot(d));
-            check(fabs(r/length - 1) <= tolerance, message("constraint ", c, ": ", r, " nm, not ", length));
-            check(fabs(d.dot(dv)/r) <= 10*tolerance, message("constraint ", c, ": its length changes at ", d.dot(dv)/r, " nm/ps"));
-        }
+        checkRigidAndConstrained(scene, start, positionsOf(*run.context), velocitiesOf(*run.context), tolerance);
     }
     // The constrained chain drifts by SHAKE, a second-order approximation of its free motion: that
     // keeps Omelyan2 and Omelyan4 at second order, whereas Yoshida4, a composition of symmetric

@@ -365,23 +365,7 @@ void testConstraintsUnderNoise(Platform& platform) {
     run.context->applyConstraints(tolerance);
     vector<Vec3> start = positionsOf(*run.context);
     run.integrator->step(300);
-    vector<Vec3> positions = positionsOf(*run.context), velocities = velocitiesOf(*run.context);
-    for (size_t b = 0; b < scene.bodies.size(); b++)
-        for (size_t i = 0; i < scene.bodies[b].size(); i++)
-            for (size_t j = i + 1; j < scene.bodies[b].size(); j++) {
-                int p = scene.bodies[b][i], q = scene.bodies[b][j];
-                Vec3 now = positions[p] - positions[q], then = start[p] - start[q];
-                check(fabs(sqrt(now.dot(now)) - sqrt(then.dot(then))) < rigidityTolerance, message("body ", b, " deformed"));
-            }
-    for (int c = 0; c < scene.system->getNumConstraints(); c++) {
-        int i, j;
-        double length;
-        scene.system->getConstraintParameters(c, i, j, length);
-        Vec3 d = positions[i] - positions[j], dv = velocities[i] - velocities[j];
-        double r = sqrt(d.dot(d));
-        check(fabs(r/length - 1) <= tolerance, message("constraint ", c, ": ", r, " nm, not ", length));
-        check(fabs(d.dot(dv)/r) <= 10*tolerance, message("constraint ", c, ": its length changes at ", d.dot(dv)/r, " nm/ps"));
-    }
+    checkRigidAndConstrained(scene, start, positionsOf(*run.context), velocitiesOf(*run.context), tolerance);
 }
 
 void testBadTemperatureAndFriction(Platform& platform) {
