@@ -26,7 +26,7 @@ import systems
 from systems import COPY_METHODS, copy_integrator
 from openmmrigid import RigidBodyIntegrator
 from test_integrator_api import EXPLICIT_BODIES, MASSES, POSITIONS, platform, topology_for, trapped_system
-from test_langevin import BOLTZMANN, block_mean, small_water_box  # noqa: F401 (small_water_box is a fixture)
+from test_langevin import BOLTZMANN, assert_water_temperatures, small_water_box  # noqa: F401 (small_water_box is a fixture)
 
 
 def thermostatted(stepSize, temperature=300.0, collisionTime=0.1, bodies=None, seed=1):
@@ -48,17 +48,7 @@ def test_water_reaches_the_bath_temperature(small_water_box):  # noqa: F811 (the
     context = openmm.Context(system, integrator, *systems.platform_and_properties("CPU"))
     context.setState(state)
     integrator.step(500)
-    numWaters = integrator.getNumBodies()
-    translational, rotational = [], []
-    for _ in range(6000):
-        integrator.step(4)
-        translational.append(integrator.getTranslationalKineticEnergy().value_in_unit(unit.kilojoule_per_mole))
-        rotational.append(integrator.getRotationalKineticEnergy().value_in_unit(unit.kilojoule_per_mole))
-    for name, energies in (("translational", translational), ("rotational", rotational)):
-        mean, error = block_mean(2 * np.asarray(energies) / (3 * numWaters * BOLTZMANN), blocks=12)
-        print(f"thermostat, {name} temperature: {mean:.2f} +- {error:.2f} K ({numWaters} waters)")
-        assert error < 0.01 * target
-        assert abs(mean - target) < 4.5 * error, f"{name} temperature {mean:.2f} +- {error:.2f} K, not {target} K"
+    assert_water_temperatures(integrator, target, samples=6000, every=4, blocks=12, label="thermostat, ")
 
 
 def test_kinetic_energy_distribution_is_canonical():
