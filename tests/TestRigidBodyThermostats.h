@@ -297,34 +297,42 @@ void testFrictionZero(Platform& platform) {
     check(fabs(langevinError - verletError) < 1e-6*verletError + 1e-9, report);
 }
 
-void testSeeds(Platform& platform) {
-    Scene scene = makeCluster(11, 3, 3, 2, true);
-    auto positionsAfter = [&](int seed, const std::map<string, string>& properties) {
-        LangevinRun run = startLangevin(scene, platform, 300.0, 5.0, 0.002, seed, properties);
-        run.integrator->step(50);
-        check(run.integrator->getRandomNumberSeed() == seed, "the seed is kept");
-        return positionsOf(*run.context);
-    };
-    vector<Vec3> a = positionsAfter(5, platformProperties), b = positionsAfter(5, platformProperties);
-    check(maxDifference(a, b) == 0.0, message("the same seed gave positions ", maxDifference(a, b), " nm apart"));
-    double other = maxDifference(a, positionsAfter(6, platformProperties));
-    check(other > 1e-4, message("seeds 5 and 6 gave positions only ", other, " nm apart"));
-    double zero = maxDifference(positionsAfter(0, platformProperties), positionsAfter(0, platformProperties));
-    check(zero > 1e-4, message("two Contexts with seed 0 gave positions only ", zero, " nm apart"));
+/**
+ * What a stochastic integrator's seed must do. runFor(scene, seed, properties, steps) starts one on the
+ * scene with that seed and returns the positions after the steps: the same seed gives the same
+ * positions, seeds 5 and 6 give positions more than `apart` nm apart, and so do two Contexts with
+ * seed 0 (each picks its own). On CPU, over 80 bodies the per-body work runs on the thread pool: the
+ * trajectory must not depend on the number of threads (no forces, so that only this plugin's
+ * arithmetic is compared).
+ */
+void checkSeeds(Platform& platform, const Scene& scene, double apart, const string& who,
+                const std::function<vector<Vec3>(const Scene&, int, const std::map<string, string>&, int)>& runFor) {
+    vector<Vec3> a = runFor(scene, 5, platformProperties, 50), b = runFor(scene, 5, platformProperties, 50);
+    check(maxDifference(a, b) == 0.0, message(who, "the same seed gave positions ", maxDifference(a, b), " nm apart"));
+    double other = maxDifference(a, runFor(scene, 6, platformProperties, 50));
+    check(other > apart, message(who, "seeds 5 and 6 gave positions only ", other, " nm apart"));
+    double zero = maxDifference(runFor(scene, 0, platformProperties, 50), runFor(scene, 0, platformProperties, 50));
+    check(zero > apart, message(who, "two Contexts with seed 0 gave positions only ", zero, " nm apart"));
     if (platform.getName() == "CPU") {
-        // Over 64 bodies the per-body work runs on the thread pool: the trajectory must not depend
-        // on the number of threads. (No forces, so that only this plugin's arithmetic is compared.)
         Scene many = makeCluster(13, 4, 4, 5, false);
         vector<Vec3> byThreads[2];
         for (int k = 0; k < 2; k++) {
             std::map<string, string> properties = platformProperties;
             properties["Threads"] = (k == 0 ? "1" : "2");
-            LangevinRun run = startLangevin(many, platform, 300.0, 5.0, 0.002, 8, properties);
-            run.integrator->step(30);
-            byThreads[k] = positionsOf(*run.context);
+            byThreads[k] = runFor(many, 8, properties, 30);
         }
-        check(maxDifference(byThreads[0], byThreads[1]) == 0.0, "1 and 2 threads gave different trajectories");
+        check(maxDifference(byThreads[0], byThreads[1]) == 0.0, who + "1 and 2 threads gave different trajectories");
     }
+}
+
+void testSeeds(Platform& platform) {
+    checkSeeds(platform, makeCluster(11, 3, 3, 2, true), 1e-4, "",
+               [&](const Scene& scene, int seed, const std::map<string, string>& properties, int steps) {
+        LangevinRun run = startLangevin(scene, platform, 300.0, 5.0, 0.002, seed, properties);
+        run.integrator->step(steps);
+        check(run.integrator->getRandomNumberSeed() == seed, "the seed is kept");
+        return positionsOf(*run.context);
+    });
 }
 
 void testCheckpoint(Platform& platform) {
@@ -554,28 +562,12 @@ void testThermostatSettings(Platform& platform) {
     check(maxDifference(positionsOf(*plain.context), positionsOf(*removed.context)) == 0.0, "a removed thermostat changes the steps");
     check(removed.integrator->getThermostatWork() == 0.0, "no work without a thermostat");
     // Seeds.
-    auto positionsAfter = [&](int seed, const std::map<string, string>& properties) {
-        Run run = startThermostat(scene, platform, 300.0, 0.01, 0.002, seed, properties);
-        run.integrator->step(50);
+    checkSeeds(platform, scene, 1e-6, "thermostat: ",
+               [&](const Scene& body, int seed, const std::map<string, string>& properties, int steps) {
+        Run run = startThermostat(body, platform, 300.0, 0.01, 0.002, seed, properties);
+        run.integrator->step(steps);
         return positionsOf(*run.context);
-    };
-    vector<Vec3> a = positionsAfter(5, platformProperties);
-    check(maxDifference(a, positionsAfter(5, platformProperties)) == 0.0, "thermostat: the same seed gave other positions");
-    check(maxDifference(a, positionsAfter(6, platformProperties)) > 1e-6, "thermostat: seeds 5 and 6 gave the same positions");
-    check(maxDifference(positionsAfter(0, platformProperties), positionsAfter(0, platformProperties)) > 1e-6,
-          "thermostat: two Contexts with seed 0 gave the same positions");
-    if (platform.getName() == "CPU") {
-        Scene many = makeCluster(13, 4, 4, 5, false);
-        vector<Vec3> byThreads[2];
-        for (int k = 0; k < 2; k++) {
-            std::map<string, string> properties = platformProperties;
-            properties["Threads"] = (k == 0 ? "1" : "2");
-            Run run = startThermostat(many, platform, 300.0, 0.01, 0.002, 8, properties);
-            run.integrator->step(30);
-            byThreads[k] = positionsOf(*run.context);
-        }
-        check(maxDifference(byThreads[0], byThreads[1]) == 0.0, "thermostat: 1 and 2 threads gave different trajectories");
-    }
+    });
     // A checkpoint continues the random numbers and keeps the work.
     Run run = startThermostat(scene, platform, 200.0, 0.01, 0.002, 3);
     run.integrator->step(20);
