@@ -235,8 +235,10 @@ def test_friction_zero_conserves_energy_like_the_constant_energy_integrator():
 
 
 def test_zero_temperature_damps_the_motion():
-    """Temperature 0 and friction 20/ps: in 1 ps the water box falls from 300 K to below 1 K. (It then
-    stays at a few tenths of a kelvin: the CPU platform's single-precision forces are a small noise.)"""
+    """Temperature 0 and friction 20/ps: in 2 ps the water box falls from 300 K to below 1 K. The
+    kinetic energy itself decays as exp(-40/ps t); what is left is the box still sliding down its
+    energy landscape, which after 1 ps still read 0.6 to 1.7 K (runs differ: CPU forces are not
+    bitwise repeatable) and after 2 ps 0.13 to 0.24 K."""
     box = systems.water_box("tip3p", size=1.5, seed=3)
     integrator = RigidBodyLangevinIntegrator(0.0, 20.0, 0.002)
     context = systems.make_context(box.system, integrator, "CPU")
@@ -244,9 +246,9 @@ def test_zero_temperature_damps_the_motion():
     context.setVelocities(box.velocities)
     integrator.step(1)
     start = integrator.computeSystemTemperature().value_in_unit(unit.kelvin)
-    integrator.step(500)
+    integrator.step(1000)
     end = integrator.computeSystemTemperature().value_in_unit(unit.kelvin)
-    print(f"T = 0: temperature {start:.1f} K -> {end:.3g} K in 1 ps")
+    print(f"T = 0: temperature {start:.1f} K -> {end:.3g} K in 2 ps")
     assert start > 250 and end < 1.0
 
 
