@@ -4,6 +4,12 @@
 // swig/rigidbodylangevinintegrator.i), re-exported by the package.
 %module(package="openmmrigid") openmmrigid
 
+// Numbers as OpenMM's own wrappers take them: anything Python can turn into an int or a float (numpy
+// scalars such as np.int64 or np.float32) where the C++ takes an int or a double.
+%begin %{
+#define SWIG_PYTHON_CAST_MODE
+%}
+
 %{
 #include <exception>
 #include <string>

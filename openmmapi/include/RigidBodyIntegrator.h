@@ -37,16 +37,26 @@ namespace OpenMMRigid {
  * TIP5P, or any other rigid constraint cluster), or given explicitly as lists of particle indices.
  * A body held rigid by constraints takes its shape from the constraint distances, so its motion is
  * that of the constrained system; an explicit body takes the shape it has when the Context's
- * positions are first set. Constraints within a body are implied by its rigidity; a constraint
- * joining a body to anything else is an error. Massless virtual sites are placed from their
- * parents after every move.
+ * positions are first set (whatever moves the particles before the first step, such as an energy
+ * minimization), and is one molecule to OpenMM, so that barostats scale it whole and
+ * getState(enforcePeriodicBox=true) keeps it whole. Constraints within a body are implied by its
+ * rigidity (one that an explicit body's shape contradicts by more than 1 % is an error); a
+ * constraint joining a body to anything else is an error. Massless virtual sites are placed from
+ * their parents after every move. Each body is assembled from the periodic images of its particles
+ * nearest each other, so molecules split by the periodic boundary in the positions given are fine.
  *
  * Velocities are on-step. Every step writes the velocity v = V + omega x (r - R) of each body
  * particle back to the Context, so that reporters, State objects and barostats see consistent data.
  * Positions or velocities set from outside (setPositions, setVelocities, setVelocitiesToTemperature,
- * loadCheckpoint, a Monte Carlo barostat move) are projected onto rigid-body motion the next time
- * the integrator runs: each body is re-fitted by a mass-weighted least-squares rigid fit, and its
- * particle velocities are replaced by the rigid motion with the same linear and angular momentum.
+ * setState, loadCheckpoint) are projected onto rigid-body motion at once, so the State read before
+ * the first step is the one the step starts from: each body is re-fitted by a mass-weighted
+ * least-squares rigid fit, and its particle velocities are replaced by the rigid motion with the
+ * same linear and angular momentum. Whatever moves particles without notice (a Monte Carlo barostat,
+ * the energy minimizer, another integrator of a CompoundIntegrator, applyConstraints) is detected at
+ * the next step, which fits the bodies again; the forces of the last step are reused only if the
+ * Context's last force evaluation was the integrator's own (not a getState() of other force groups)
+ * and nothing changed since (updateParametersInContext included). A step that would move a body or
+ * free particle further than the nonbonded cutoff or half the box stops with an OpenMMException.
  */
 class OPENMM_EXPORT_RIGID RigidBodyIntegrator : public RigidBodyIntegratorBase {
 public:

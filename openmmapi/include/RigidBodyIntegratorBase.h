@@ -104,6 +104,10 @@ public:
      * @param steps   the number of time steps to take
      */
     void step(int steps);
+    /** "RigidBodyIntegrator" or "RigidBodyLangevinIntegrator": the class the user made, which messages name. */
+    const std::string& getClassName() const {
+        return className;
+    }
 protected:
     /**
      * @param className  the name of the concrete class, for messages
@@ -137,10 +141,6 @@ protected:
     /** The kernel, once the integrator is bound to a Context (throws otherwise). */
     const RigidBodyStepKernel& getKernel() const;
     RigidBodyStepKernel& getKernel();
-    /** "RigidBodyIntegrator" or "RigidBodyLangevinIntegrator", for messages. */
-    const std::string& getClassName() const {
-        return className;
-    }
     OpenMM::Kernel kernel;
 private:
     void checkBodies() const;

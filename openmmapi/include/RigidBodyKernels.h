@@ -28,6 +28,25 @@ public:
      */
     virtual void project(OpenMM::ContextImpl& context) = 0;
     /**
+     * Project the context's velocities onto rigid motion, the bodies staying as fitted (their
+     * positions are current: see positionsAreCurrent()). Called when velocities were set.
+     */
+    virtual void projectVelocities(OpenMM::ContextImpl& context) = 0;
+    /**
+     * Give the explicit bodies that have no shape yet the shapes they have in the context's
+     * positions (called when positions are set; bodies the positions cannot shape wait).
+     */
+    virtual void captureShapes(OpenMM::ContextImpl& context) = 0;
+    /** Whether every body has its shape. */
+    virtual bool allShapesKnown() const = 0;
+    /**
+     * Whether the context's positions are still those this kernel last wrote (by a step or a
+     * projection): if not, something moved the particles without telling the integrator (another
+     * integrator of a CompoundIntegrator, the energy minimizer, applyConstraints), and the bodies
+     * must be fitted again before the next step.
+     */
+    virtual bool positionsAreCurrent(OpenMM::ContextImpl& context) const = 0;
+    /**
      * Compute the kinetic energy, sum m v^2 / 2 over the massive particles.
      */
     virtual double computeKineticEnergy(OpenMM::ContextImpl& context) = 0;
@@ -38,13 +57,19 @@ public:
     virtual void computeKineticEnergies(OpenMM::ContextImpl& context, double& translational, double& rotational) = 0;
     /** The bodies, as found when the kernel was initialized. */
     virtual const RigidBodySystem& getBodies() const = 0;
-    /** Write the kernel's own state (the random numbers and what they produced) to a checkpoint. */
+    /**
+     * Write the kernel's own state (the random numbers and what they produced) to a checkpoint, after
+     * the integrator's header (RigidBodyIntegratorBase::createCheckpoint()).
+     */
     virtual void createCheckpoint(OpenMM::ContextImpl& context, std::ostream& stream) const = 0;
     /**
-     * Read the state written by createCheckpoint(). A stream that ends here (a checkpoint written
-     * before the kernel had a state to save) leaves the state as it is.
+     * Read the state written by createCheckpoint().
+     *
+     * @param version  the checkpoint format: 1 (with a header naming the class), or 0 for a checkpoint
+     *                 from before headers, whose data end the stream; one that ends here (written before
+     *                 the kernel had a state to save) leaves the state as it is
      */
-    virtual void loadCheckpoint(OpenMM::ContextImpl& context, std::istream& stream) = 0;
+    virtual void loadCheckpoint(OpenMM::ContextImpl& context, std::istream& stream, int version) = 0;
 };
 
 /**

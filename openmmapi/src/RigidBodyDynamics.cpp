@@ -6,8 +6,11 @@
 #include "openmm/OpenMMException.h"
 #include "openmm/internal/ThreadPool.h"
 #include "openmm/reference/ReferenceConstraints.h"
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <mutex>
+#include <sstream>
 #include <string>
 
 using namespace OpenMM;
@@ -33,11 +36,15 @@ Vector3 bodyAngularVelocity(const RigidBody& body, const Vector3& bodyAngularMom
     return omega;
 }
 
-/** Throw, naming the particle and body, unless all three components are finite. */
-void requireFinite(const Vec3& v, const char* quantity, int particle, int body) {
+/** Throw, naming the integrator, particle and body, unless all three components are finite. */
+void requireFinite(const string& className, const Vec3& v, const char* quantity, int particle, int body) {
     if (!(isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2])))
-        throw OpenMMException("RigidBodyIntegrator: particle " + to_string(particle) + " of body " + to_string(body) +
+        throw OpenMMException(className + ": particle " + to_string(particle) + " of body " + to_string(body) +
                 " has a non-finite " + quantity);
+}
+
+bool isFinite(const Vec3& v) {
+    return isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]);
 }
 
 /** One Newton-Schulz step towards the nearest rotation, A (3 - A^T A) / 2: removes the rounding drift. */
@@ -52,7 +59,8 @@ void reorthonormalize(Matrix3& a) {
 
 } // namespace
 
-RigidBodyDynamics::RigidBodyDynamics(RigidBodySystem& system) : system(system), threads(NULL) {
+RigidBodyDynamics::RigidBodyDynamics(RigidBodySystem& system) : system(system), periodic(false),
+        displacementLimit(numeric_limits<double>::infinity()), threads(NULL) {
     states.resize(system.getBodies().size());
     const vector<double>& masses = system.getMasses();
     inverseMasses.resize(masses.size());
@@ -101,32 +109,104 @@ void RigidBodyDynamics::forEachBody(const function<void(int)>& task) {
         throw OpenMMException(error);
 }
 
+void RigidBodyDynamics::setPeriodicBox(const Vec3* vectors) {
+    periodic = (vectors != NULL);
+    if (periodic)
+        for (int k = 0; k < 3; k++)
+            box[k] = vectors[k];
+}
+
+void RigidBodyDynamics::setDisplacementLimit(double limit, const string& description) {
+    displacementLimit = limit;
+    displacementLimitName = description;
+}
+
+void RigidBodyDynamics::assemble(const RigidBody& body, const vector<Vec3>& positions, vector<Vec3>& whole) const {
+    // Each particle at the periodic image nearest the body's first particle (a body is far smaller
+    // than half the box), so that a molecule split by the boundary in the positions given is whole.
+    // The box is in OpenMM's reduced form: c, then b, then a removes each component in turn. A
+    // particle already nearest keeps its coordinates bit for bit.
+    const int n = body.particles.size();
+    whole.resize(n);
+    const Vec3& first = positions[body.particles[0]];
+    for (int i = 0; i < n; i++) {
+        Vec3 r = positions[body.particles[i]];
+        if (periodic && i > 0) {
+            for (int k = 2; k >= 0; k--) {
+                double shift = round((r[k] - first[k])/box[k][k]);
+                if (shift != 0.0)
+                    r -= box[k]*shift;
+            }
+        }
+        whole[i] = r;
+    }
+}
+
+bool RigidBodyDynamics::shapeBody(int b, const vector<Vec3>& positions, bool strict) {
+    RigidBody& body = system.getBodies()[b];
+    const string& className = system.getClassName();
+    const int n = body.particles.size();
+    vector<Vec3> whole;
+    assemble(body, positions, whole);
+    bool finite = true, spread = (n == 1);
+    for (int i = 0; i < n; i++) {
+        finite = finite && isFinite(whole[i]);
+        spread = spread || whole[i] != whole[0];
+    }
+    if (!finite || !spread) {
+        if (!strict)
+            return false;
+        for (int i = 0; i < n; i++)
+            requireFinite(className, whole[i], "position", body.particles[i], b);
+        throw OpenMMException(className + ": the particles of body " + to_string(b) + " all sit at one point; "
+                "an explicit body takes its shape from the positions, so set them before using the body");
+    }
+    // A constraint inside the body is implied by its rigidity; one the shape contradicts is a mistake
+    // in the System or the positions, not something to drop silently. 1 % allows for positions read
+    // from a file with a few digits.
+    for (const RigidBodySystem::InternalConstraint& constraint : system.getInternalConstraints()) {
+        if (constraint.body != b)
+            continue;
+        int i = find(body.particles.begin(), body.particles.end(), constraint.particle1) - body.particles.begin();
+        int j = find(body.particles.begin(), body.particles.end(), constraint.particle2) - body.particles.begin();
+        double distance = sqrt((whole[i] - whole[j]).dot(whole[i] - whole[j]));
+        if (fabs(distance - constraint.distance) > 0.01*constraint.distance)
+            throw OpenMMException(className + ": constraint " + to_string(constraint.index) + " holds particles " +
+                    to_string(constraint.particle1) + " and " + to_string(constraint.particle2) + " of body " + to_string(b) +
+                    " at " + to_string(constraint.distance) + " nm, but the positions that give the body its shape put them " +
+                    to_string(distance) + " nm apart; remove the constraint or set positions that satisfy it");
+    }
+    Vector3 center = {0.0, 0.0, 0.0};
+    for (int i = 0; i < n; i++)
+        for (int k = 0; k < 3; k++)
+            center[k] += body.masses[i]*whole[i][k]/body.mass;
+    vector<Vector3> centred(n);
+    for (int i = 0; i < n; i++)
+        for (int k = 0; k < 3; k++)
+            centred[i][k] = whole[i][k] - center[k];
+    body.setShape(centred);
+    return true;
+}
+
+void RigidBodyDynamics::captureShapes(const vector<Vec3>& positions) {
+    vector<RigidBody>& bodies = system.getBodies();
+    for (size_t b = 0; b < bodies.size(); b++)
+        if (!bodies[b].shapeKnown)
+            shapeBody(b, positions, false);
+}
+
+bool RigidBodyDynamics::allShapesKnown() const {
+    for (const RigidBody& body : system.getBodies())
+        if (!body.shapeKnown)
+            return false;
+    return true;
+}
+
 void RigidBodyDynamics::ensureShapes(const vector<Vec3>& positions) {
     vector<RigidBody>& bodies = system.getBodies();
-    for (size_t b = 0; b < bodies.size(); b++) {
-        RigidBody& body = bodies[b];
-        if (body.shapeKnown)
-            continue;
-        const int n = body.particles.size();
-        Vector3 center = {0.0, 0.0, 0.0};
-        for (int i = 0; i < n; i++) {
-            const Vec3& r = positions[body.particles[i]];
-            requireFinite(r, "position", body.particles[i], b);
-            for (int k = 0; k < 3; k++)
-                center[k] += body.masses[i]*r[k]/body.mass;
-        }
-        vector<Vector3> centred(n);
-        bool spread = (n == 1);
-        for (int i = 0; i < n; i++) {
-            for (int k = 0; k < 3; k++)
-                centred[i][k] = positions[body.particles[i]][k] - center[k];
-            spread = spread || positions[body.particles[i]] != positions[body.particles[0]];
-        }
-        if (!spread)
-            throw OpenMMException("RigidBodyIntegrator: the particles of body " + to_string(b) + " all sit at one point; "
-                    "an explicit body takes its shape from the positions, so set them before using the body");
-        body.setShape(centred);
-    }
+    for (size_t b = 0; b < bodies.size(); b++)
+        if (!bodies[b].shapeKnown)
+            shapeBody(b, positions, true);
 }
 
 void RigidBodyDynamics::project(vector<Vec3>& positions, vector<Vec3>& velocities) {
@@ -139,22 +219,21 @@ void RigidBodyDynamics::project(vector<Vec3>& positions, vector<Vec3>& velocitie
 void RigidBodyDynamics::fitBody(int index, vector<Vec3>& positions, vector<Vec3>& velocities) {
     RigidBody& body = system.getBodies()[index];
     BodyState& state = states[index];
+    const string& className = system.getClassName();
     const int n = body.particles.size();
-    Vector3 center = {0.0, 0.0, 0.0}, velocity = {0.0, 0.0, 0.0};
+    vector<Vec3> whole;
+    assemble(body, positions, whole);
+    Vector3 center = {0.0, 0.0, 0.0};
     for (int i = 0; i < n; i++) {
-        const Vec3& r = positions[body.particles[i]];
-        const Vec3& v = velocities[body.particles[i]];
-        requireFinite(r, "position", body.particles[i], index);
-        requireFinite(v, "velocity", body.particles[i], index);
-        for (int k = 0; k < 3; k++) {
+        const Vec3& r = whole[i];
+        requireFinite(className, r, "position", body.particles[i], index);
+        for (int k = 0; k < 3; k++)
             center[k] += body.masses[i]*r[k]/body.mass;
-            velocity[k] += body.masses[i]*v[k]/body.mass;
-        }
     }
     vector<Vector3> centred(n);
     for (int i = 0; i < n; i++)
         for (int k = 0; k < 3; k++)
-            centred[i][k] = positions[body.particles[i]][k] - center[k];
+            centred[i][k] = whole[i][k] - center[k];
     Matrix3 rotation = identityMatrix();  // body to lab
     if (body.kind != RigidBody::Point) {
         double residual;
@@ -174,8 +253,25 @@ void RigidBodyDynamics::fitBody(int index, vector<Vec3>& positions, vector<Vec3>
     }
     state.center = center;
     state.attitude = transpose(rotation);
+    for (int i = 0; i < n; i++)
+        positions[body.particles[i]] = toVec3(center) + toVec3(multiply(rotation, body.bodyCoordinates[i]));
+    projectBodyVelocities(index, velocities);
+}
+
+void RigidBodyDynamics::projectBodyVelocities(int index, vector<Vec3>& velocities) {
+    // The rigid motion with the linear and angular momentum of the velocities about the fitted shape.
+    const RigidBody& body = system.getBodies()[index];
+    BodyState& state = states[index];
+    const int n = body.particles.size();
+    Vector3 velocity = {0.0, 0.0, 0.0};
+    for (int i = 0; i < n; i++) {
+        const Vec3& v = velocities[body.particles[i]];
+        requireFinite(system.getClassName(), v, "velocity", body.particles[i], index);
+        for (int k = 0; k < 3; k++)
+            velocity[k] += body.masses[i]*v[k]/body.mass;
+    }
     state.velocity = velocity;
-    // Rigid positions, and the angular momentum of the velocities about the fitted shape.
+    const Matrix3 rotation = transpose(state.attitude);
     Vector3 angularMomentum = {0.0, 0.0, 0.0};
     vector<Vector3> arms(n);
     for (int i = 0; i < n; i++) {
@@ -184,12 +280,17 @@ void RigidBodyDynamics::fitBody(int index, vector<Vec3>& positions, vector<Vec3>
         Vector3 moment = cross(arms[i], relative);
         for (int k = 0; k < 3; k++)
             angularMomentum[k] += body.masses[i]*moment[k];
-        positions[body.particles[i]] = toVec3(center) + toVec3(arms[i]);
     }
     state.angularMomentum = angularMomentum;
     Vector3 omega = multiplyTransposed(state.attitude, bodyAngularVelocity(body, multiply(state.attitude, angularMomentum)));
     for (int i = 0; i < n; i++)
         velocities[body.particles[i]] = toVec3(velocity) + toVec3(cross(omega, arms[i]));
+}
+
+void RigidBodyDynamics::projectVelocities(vector<Vec3>& velocities) {
+    for (size_t b = 0; b < states.size(); b++)
+        projectBodyVelocities(b, velocities);
+    writtenVelocities = velocities;
 }
 
 void RigidBodyDynamics::rotate(const RigidBody& body, BodyState& state, double dt, RigidBodyIntegratorBase::RotationMethod method) const {
@@ -282,26 +383,41 @@ void RigidBodyDynamics::advance(vector<Vec3>& positions, vector<Vec3>& velocitie
             Vec3 velocity = toVec3(state.velocity) + force*(kick/body.mass);
             Vec3 angularMomentum = toVec3(state.angularMomentum) + torque*kick;
             if (!(isfinite(velocity.dot(velocity)) && isfinite(angularMomentum.dot(angularMomentum))))
-                throw OpenMMException("RigidBodyIntegrator: body " + to_string(b) + " has a non-finite velocity, force or "
+                throw OpenMMException(system.getClassName() + ": body " + to_string(b) + " has a non-finite velocity, force or "
                         "torque; the simulation is unstable (try a smaller step size)");
             state.velocity = toVector(velocity);
             state.angularMomentum = toVector(angularMomentum);
         }
+        checkDisplacement("body", b, sqrt(state.velocity[0]*state.velocity[0] + state.velocity[1]*state.velocity[1] +
+                                          state.velocity[2]*state.velocity[2])*fabs(drift), drift);
         driftBody(b, drift, method, positions);
     });
     const vector<int>& free = system.getFreeParticles();
-    if (constraints)
-        previousPositions = positions;
     for (int p : free) {
         if (forces != NULL)
             velocities[p] += (*forces)[p]*(kick*inverseMasses[p]);
-        positions[p] += velocities[p]*drift;
+        checkDisplacement("particle", p, sqrt(velocities[p].dot(velocities[p]))*fabs(drift), drift);
     }
+    if (constraints)
+        previousPositions = positions;
+    for (int p : free)
+        positions[p] += velocities[p]*drift;
     if (constraints) {
         constraints->apply(previousPositions, positions, inverseMasses, constraintTolerance);
         for (int p : free)
             velocities[p] = (positions[p] - previousPositions[p])/drift;
     }
+}
+
+void RigidBodyDynamics::checkDisplacement(const char* what, int index, double distance, double drift) const {
+    // Not "distance > limit": a NaN distance must stop the step too.
+    if (distance <= displacementLimit)
+        return;
+    stringstream text;
+    text << system.getClassName() << ": " << what << " " << index << " would move " << distance << " nm in one drift of " <<
+            fabs(drift) << " ps, more than " << displacementLimitName << " (" << displacementLimit << " nm); the simulation "
+            "is unstable (try a smaller step size, or minimize the energy first)";
+    throw OpenMMException(text.str());
 }
 
 void RigidBodyDynamics::thermalize(vector<Vec3>& positions, vector<Vec3>& velocities, double c, double kT,

@@ -1,10 +1,15 @@
 #include "RigidBodyIntegratorBase.h"
 #include "RigidBodyKernels.h"
+#include "internal/RigidBodyMolecules.h"
 #include "internal/RigidBodySystem.h"
 #include "openmm/Context.h"
 #include "openmm/OpenMMException.h"
 #include "openmm/internal/ContextImpl.h"
 #include "openmm/reference/SimTKOpenMMRealType.h"
+#include <algorithm>
+#include <cstdint>
+#include <istream>
+#include <ostream>
 #include <string>
 
 using namespace OpenMM;
@@ -61,15 +66,11 @@ vector<int> RigidBodyIntegratorBase::getBodyParticles(int index) const {
 }
 
 const RigidBody& RigidBodyIntegratorBase::getShapedBody(int index) const {
-    vector<int> particles = getBodyParticles(index);  // checks the index
+    getBodyParticles(index);  // checks the index
     const RigidBody& body = getKernel().getBodies().getBodies()[index];
-    if (!body.shapeKnown) {
-        // An explicit body takes its shape from the positions; fit now rather than at the next step.
-        RigidBodyIntegratorBase& self = const_cast<RigidBodyIntegratorBase&>(*this);
-        self.getKernel().project(*context);
-        self.needsProjection = false;
-        self.forcesAreValid = false;
-    }
+    if (!body.shapeKnown)
+        throw OpenMMException(className + ": body " + to_string(index) + " is an explicit body, which takes its shape from "
+                "the positions; set the Context's positions first");
     return body;
 }
 
@@ -83,6 +84,7 @@ vector<double> RigidBodyIntegratorBase::getBodyMoments(int index) const {
 }
 
 int RigidBodyIntegratorBase::getNumDegreesOfFreedom() const {
+    // The rotational degrees of freedom of an explicit body depend on its shape (linear or not).
     for (int b = 0; b < getNumBodies(); b++)
         getShapedBody(b);
     return getKernel().getBodies().getNumDegreesOfFreedom();
@@ -114,6 +116,8 @@ void RigidBodyIntegratorBase::initialize(ContextImpl& contextRef) {
     owner = &contextRef.getOwner();
     kernel = context->getPlatform().createKernel(getKernelNames()[0], contextRef);
     initializeKernel(contextRef);
+    if (explicitBodies)
+        RigidBodyMoleculesImpl::install(contextRef, bodies, className);
     bound = true;
     forcesAreValid = false;
     needsProjection = true;
@@ -125,26 +129,90 @@ void RigidBodyIntegratorBase::cleanup() {
 }
 
 void RigidBodyIntegratorBase::stateChanged(State::DataType changed) {
-    if (changed == State::Positions || changed == State::Velocities) {
-        needsProjection = true;
-        forcesAreValid = false;
+    // Every notice makes the forces from the end of the last step stale: new positions, velocities
+    // (which the next projection may change), parameters, or a Force's updateParametersInContext()
+    // (ContextImpl::systemChanged(), which sends Energy).
+    forcesAreValid = false;
+    if ((changed != State::Positions && changed != State::Velocities) || !bound)
+        return;
+    const bool wasFitted = !needsProjection;
+    needsProjection = true;
+    RigidBodyStepKernel& stepKernel = getKernel();
+    // Explicit bodies take their shape from the first positions set, whatever (an energy
+    // minimization, say) moves the particles before the first step; a constraint the shape
+    // contradicts is an error here.
+    if (changed == State::Positions)
+        stepKernel.captureShapes(*context);
+    // Project now, so that the State a user reads before the first step (its kinetic energy, its
+    // velocities) is the rigid one the step starts from. What cannot be projected yet (an explicit
+    // body without a shape, a non-finite coordinate) stays for the step, which says what is wrong.
+    if (stepKernel.allShapesKnown()) {
+        try {
+            // New velocities on bodies already fitted to the positions: only the velocities change.
+            if (changed == State::Velocities && wasFitted && stepKernel.positionsAreCurrent(*context))
+                stepKernel.projectVelocities(*context);
+            else
+                stepKernel.project(*context);
+            needsProjection = false;
+        }
+        catch (const OpenMMException&) {
+        }
     }
-    else if (changed == State::Parameters)
-        forcesAreValid = false;
 }
 
 double RigidBodyIntegratorBase::computeKineticEnergy() {
     return getKernel().computeKineticEnergy(*context);
 }
 
+namespace {
+
+/** The first bytes of the integrator's part of a checkpoint since version 1. */
+const char checkpointMagic[8] = {'O', 'M', 'M', 'R', 'I', 'G', 'I', 'D'};
+const int32_t checkpointVersion = 1;
+
+} // namespace
+
 void RigidBodyIntegratorBase::createCheckpoint(ostream& stream) const {
-    // The bodies' state is a function of the positions and velocities the checkpoint already holds;
-    // the kernel adds the state of its random numbers.
-    getKernel().createCheckpoint(*context, stream);
+    // The bodies' state is a function of the positions and velocities the checkpoint already holds.
+    // The header names the format and the class; the kernel adds the state of its random numbers.
+    const RigidBodyStepKernel& stepKernel = getKernel();
+    stream.write(checkpointMagic, sizeof(checkpointMagic));
+    stream.write((const char*) &checkpointVersion, sizeof(checkpointVersion));
+    int32_t length = className.size();
+    stream.write((const char*) &length, sizeof(length));
+    stream.write(className.data(), length);
+    stepKernel.createCheckpoint(*context, stream);
 }
 
 void RigidBodyIntegratorBase::loadCheckpoint(istream& stream) {
-    getKernel().loadCheckpoint(*context, stream);
+    RigidBodyStepKernel& stepKernel = getKernel();
+    // A checkpoint from before version 1 has no header: its first bytes are a random number seed.
+    int32_t version = 0;
+    streampos start = stream.tellg();
+    char magic[sizeof(checkpointMagic)];
+    stream.read(magic, sizeof(magic));
+    if (stream.gcount() == sizeof(magic) && equal(magic, magic + sizeof(magic), checkpointMagic)) {
+        int32_t length = -1;
+        stream.read((char*) &version, sizeof(version));
+        stream.read((char*) &length, sizeof(length));
+        if (!stream || length < 0 || length > 256)
+            throw OpenMMException(className + ": the checkpoint's integrator header is damaged");
+        string writer(length, ' ');
+        stream.read(&writer[0], length);
+        if (!stream)
+            throw OpenMMException(className + ": the checkpoint's integrator header is damaged");
+        if (version > checkpointVersion)
+            throw OpenMMException(className + ": the checkpoint has version " + to_string(version) + " of this plugin's "
+                    "format, newer than this build reads (" + to_string(checkpointVersion) + "); update openmm-rigid");
+        if (writer != className)
+            throw OpenMMException(className + ": the checkpoint was written by a " + writer + ", not a " + className +
+                    "; load it into a Context whose integrator is a " + writer);
+    }
+    else {
+        stream.clear();
+        stream.seekg(start);
+    }
+    stepKernel.loadCheckpoint(*context, stream, version);
     needsProjection = true;
     forcesAreValid = false;
 }
@@ -153,20 +221,35 @@ void RigidBodyIntegratorBase::step(int steps) {
     if (!bound)
         throw OpenMMException("This Integrator is not bound to a context!");
     RigidBodyStepKernel& stepKernel = getKernel();
+    // The rule: what the step takes from before (the bodies' frames and momenta, the forces of the
+    // last evaluation) is proven current first, or rebuilt. The bodies are current if the positions
+    // are those the kernel last wrote and no notice came since; the forces are current if, besides,
+    // the Context's last evaluation was this integrator's, of its force groups (a getState() of other
+    // groups overwrites them).
     for (int i = 0; i < steps; ++i) {
         if (context->updateContextState()) {
             // A Force (e.g. a barostat) moved the particles: re-fit the bodies to them.
             forcesAreValid = false;
             needsProjection = true;
         }
+        if (!needsProjection && !stepKernel.positionsAreCurrent(*context))
+            needsProjection = true;  // moved without a notice: a CompoundIntegrator's other integrator, the minimizer
         if (needsProjection) {
             stepKernel.project(*context);
             needsProjection = false;
             forcesAreValid = false;
         }
-        if (!forcesAreValid)
+        if (!forcesAreValid || context->getLastForceGroups() != getIntegrationForceGroups())
             context->calcForcesAndEnergy(true, false, getIntegrationForceGroups());
-        executeKernel(*context);
+        try {
+            executeKernel(*context);
+        }
+        catch (...) {
+            // The step stopped part way (an unstable simulation): rebuild everything from the Context.
+            needsProjection = true;
+            forcesAreValid = false;
+            throw;
+        }
         forcesAreValid = true;
     }
 }

@@ -64,7 +64,8 @@ void RigidBody::setShape(const vector<Vector3>& centred) {
     shapeKnown = true;
 }
 
-RigidBodySystem::RigidBodySystem(const System& system, const vector<vector<int> >& explicitBodies, bool useExplicit) {
+RigidBodySystem::RigidBodySystem(const System& system, const vector<vector<int> >& explicitBodies, bool useExplicit,
+                                 const string& className) : className(className) {
     const int numParticles = system.getNumParticles();
     masses.resize(numParticles);
     for (int i = 0; i < numParticles; i++)
@@ -75,13 +76,15 @@ RigidBodySystem::RigidBodySystem(const System& system, const vector<vector<int> 
             RigidBody body;
             body.particles = explicitBodies[b];
             if (body.particles.empty())
-                throw OpenMMException("RigidBodyIntegrator: body " + to_string(b) + " has no particles");
+                throw OpenMMException(className + ": body " + to_string(b) + " has no particles");
             for (int p : body.particles) {
                 if (p < 0 || p >= numParticles)
-                    throw OpenMMException("RigidBodyIntegrator: body " + to_string(b) + " lists particle " + to_string(p) +
+                    throw OpenMMException(className + ": body " + to_string(b) + " lists particle " + to_string(p) +
                             ", but the System has particles 0 to " + to_string(numParticles - 1));
+                if (bodyOfParticle[p] == (int) b)
+                    throw OpenMMException(className + ": body " + to_string(b) + " lists particle " + to_string(p) + " twice");
                 if (bodyOfParticle[p] != -1)
-                    throw OpenMMException("RigidBodyIntegrator: particle " + to_string(p) + " is in body " +
+                    throw OpenMMException(className + ": particle " + to_string(p) + " is in body " +
                             to_string(bodyOfParticle[p]) + " and in body " + to_string(b) + "; a particle may belong to one body only");
                 bodyOfParticle[p] = b;
             }
@@ -105,11 +108,13 @@ RigidBodySystem::RigidBodySystem(const System& system, const vector<vector<int> 
             kept.push_back({i, j});
             keptDistances.push_back(distance);
         }
-        else if (bi != bj) {
+        else if (bi == bj)
+            internalConstraints.push_back({c, bi, i, j, distance});
+        else {
             auto describe = [](int particle, int body) {
                 return "particle " + to_string(particle) + (body == -1 ? " (free)" : " (body " + to_string(body) + ")");
             };
-            throw OpenMMException("RigidBodyIntegrator: constraint " + to_string(c) + " joins " + describe(i, bi) + " and " +
+            throw OpenMMException(className + ": constraint " + to_string(c) + " joins " + describe(i, bi) + " and " +
                     describe(j, bj) + "; a constraint may not connect a rigid body to anything outside it");
         }
     }
@@ -187,10 +192,10 @@ void RigidBodySystem::checkBody(const System& system, int index) {
     RigidBody& body = bodies[index];
     for (int p : body.particles) {
         if (system.isVirtualSite(p))
-            throw OpenMMException("RigidBodyIntegrator: particle " + to_string(p) + " of body " + to_string(index) +
+            throw OpenMMException(className + ": particle " + to_string(p) + " of body " + to_string(index) +
                     " is a virtual site; virtual sites follow their parent particles and cannot be body members");
         if (masses[p] == 0.0)
-            throw OpenMMException("RigidBodyIntegrator: particle " + to_string(p) + " of body " + to_string(index) +
+            throw OpenMMException(className + ": particle " + to_string(p) + " of body " + to_string(index) +
                     " has zero mass; every body member must be massive");
         body.masses.push_back(masses[p]);
         body.mass += masses[p];

@@ -257,9 +257,13 @@ constant temperature (``RigidBodyLangevinIntegrator`` is the Langevin alternativ
 The bodies are either found in the System when the Context is created (every cluster of three or
 more particles that its constraints hold rigid, such as rigid water), or given explicitly as lists
 of particle indices. An explicit body takes the shape it has when the Context's positions are
-first set. Velocities are on-step; each step writes v = V + omega x (r - R) back to every body
-particle. Positions or velocities set from outside are projected onto rigid-body motion the next
-time the integrator runs.
+first set, and is one molecule to OpenMM (barostats and periodic wrapping keep it whole). Velocities
+are on-step; each step writes v = V + omega x (r - R) back to every body particle. Positions or
+velocities set from outside are projected onto rigid-body motion at once; whatever moves the
+particles without notice (a barostat, the minimizer, another integrator of a CompoundIntegrator) is
+detected and the bodies are fitted again at the next step, and cached forces are reused only while
+they are current. Bodies split by the periodic boundary are assembled whole. A step that would move
+a body further than the nonbonded cutoff or half the box raises OpenMMException.
 
 Parameters
 ----------

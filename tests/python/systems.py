@@ -280,7 +280,8 @@ class Solvated:
 
 
 def _prepare(topology, positions, system, seed, frozen=(), temperature=300.0, equilibrate=500):
-    """Minimise (particles in frozen held fixed) and draw velocities; constraints hold to 1e-10."""
+    """Minimise (particles in frozen held fixed) and draw velocities; constraints hold to what the CPU
+    platform's SETTLE gives (a few 1e-9 nm)."""
     minimise = openmm.XmlSerializer.deserialize(openmm.XmlSerializer.serialize(system))
     for index in frozen:
         minimise.setParticleMass(index, 0.0)

@@ -83,7 +83,12 @@ def test_cm_motion_remover(platformName):
     _, velocities = state_arrays(context)
     momentum = (masses[:, None]*velocities).sum(axis=0)
     scale = np.sqrt((masses[:, None]*velocities**2).sum()*masses.sum())
-    assert np.linalg.norm(momentum) < 1e-6*scale
+    # The remover acts at the start of each step; what the last step adds is the impulse of the net
+    # force, zero but for rounding: about 1e-10 on Reference, but on CPU its single-precision forces
+    # sum to about 0.5 kJ/mol/nm, an impulse of 1e-3 against a drift of 1e4 amu nm/ps taken out.
+    netForce = context.getState(getForces=True).getForces(asNumpy=True).value_in_unit(
+        unit.kilojoule_per_mole/unit.nanometer).sum(axis=0)
+    assert np.linalg.norm(momentum) < 1e-6*scale + 2*0.002*np.linalg.norm(netForce)
     # The degrees of freedom include the 3 the remover takes away (the same count as OpenMM's).
     assert integrator.getNumDegreesOfFreedom() == 6*integrator.getNumBodies() - 3
 

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <string>
 #include <vector>
 
 namespace OpenMM {
@@ -54,11 +55,38 @@ public:
      */
     void setThreadPool(OpenMM::ThreadPool* pool);
     /**
+     * Set the periodic box the positions live in (the three reduced box vectors, in nm), or null if
+     * the System is not periodic. Every fit assembles each body from the periodic images of its
+     * particles nearest its first particle, so a molecule split by the boundary is taken whole.
+     */
+    void setPeriodicBox(const OpenMM::Vec3* vectors);
+    /**
+     * Set the largest distance, in nm, a body or free particle may move in one drift: further is an
+     * unstable simulation, and the drift stops with an OpenMMException saying so.
+     *
+     * @param limit        the distance (infinity for none)
+     * @param description  what the distance is, for the message (e.g. "the nonbonded cutoff")
+     */
+    void setDisplacementLimit(double limit, const std::string& description);
+    /**
+     * Give every explicit body that has no shape yet the shape it has in these positions, where
+     * they place its particles apart and at finite coordinates (the others wait for later positions).
+     * A constraint inside a body that the shape contradicts by more than 1 % is an OpenMMException.
+     */
+    void captureShapes(const std::vector<OpenMM::Vec3>& positions);
+    /** Whether every body has its shape (explicit bodies get theirs from the first positions set). */
+    bool allShapesKnown() const;
+    /**
      * Fit every body to the positions (mass-weighted least squares, Horn's method), then replace the
      * body particles' positions by the rigid ones and their velocities by the rigid motion with the
-     * same linear and angular momentum. Explicit bodies take their shape from the first positions.
+     * same linear and angular momentum. Explicit bodies without a shape take it from these positions.
      */
     void project(std::vector<OpenMM::Vec3>& positions, std::vector<OpenMM::Vec3>& velocities);
+    /**
+     * project() for the velocities alone, when the bodies are already fitted to the positions (the
+     * velocities were set, the positions are those of the last fit or step).
+     */
+    void projectVelocities(std::vector<OpenMM::Vec3>& velocities);
     /**
      * One stage of a step: kick every body and free particle by the forces, then let it move freely.
      * The body momenta are those the previous stage left, unless something other than this class
@@ -150,9 +178,24 @@ private:
     void driftBody(int b, double h, RigidBodyIntegratorBase::RotationMethod method, std::vector<OpenMM::Vec3>& positions);
     /** Make sure every body has a shape, taking explicit bodies' shapes from these positions. */
     void ensureShapes(const std::vector<OpenMM::Vec3>& positions);
+    /**
+     * Give body b the shape it has in the positions. If they cannot give one (non-finite, or every
+     * particle at one point), throw if strict, else return false.
+     */
+    bool shapeBody(int b, const std::vector<OpenMM::Vec3>& positions, bool strict);
+    /** The positions of a body's particles, each at the periodic image nearest the first particle. */
+    void assemble(const RigidBody& body, const std::vector<OpenMM::Vec3>& positions, std::vector<OpenMM::Vec3>& whole) const;
+    /** Throw the "unstable" error if a drift would move a body or free particle further than the limit. */
+    void checkDisplacement(const char* what, int index, double distance, double drift) const;
     void rotate(const RigidBody& body, BodyState& state, double dt, RigidBodyIntegratorBase::RotationMethod method) const;
     void fitBody(int index, std::vector<OpenMM::Vec3>& positions, std::vector<OpenMM::Vec3>& velocities);
+    /** Replace body index's particle velocities by the rigid motion with their linear and angular momentum. */
+    void projectBodyVelocities(int index, std::vector<OpenMM::Vec3>& velocities);
     RigidBodySystem& system;
+    bool periodic;
+    OpenMM::Vec3 box[3];
+    double displacementLimit;
+    std::string displacementLimitName;
     std::vector<BodyState> states;
     std::vector<double> inverseMasses;
     std::vector<OpenMM::Vec3> previousPositions;

@@ -45,8 +45,15 @@ public:
      * @param system          the System
      * @param explicitBodies  the bodies given to the integrator, or empty to find them from the constraints
      * @param useExplicit     whether explicitBodies is the list of bodies (it may legitimately be empty)
+     * @param className       the class of the integrator the user made, which every message names
      */
-    RigidBodySystem(const OpenMM::System& system, const std::vector<std::vector<int> >& explicitBodies, bool useExplicit);
+    RigidBodySystem(const OpenMM::System& system, const std::vector<std::vector<int> >& explicitBodies, bool useExplicit,
+                    const std::string& className);
+    /** A constraint between two particles of one body (implied by its rigidity, checked against its shape). */
+    struct InternalConstraint {
+        int index, body, particle1, particle2;
+        double distance;
+    };
     std::vector<RigidBody>& getBodies() {
         return bodies;
     }
@@ -68,12 +75,22 @@ public:
     const std::vector<double>& getMasses() const {
         return masses;
     }
+    /** The constraints inside bodies (dropped from the dynamics; an explicit body's shape must agree with them). */
+    const std::vector<InternalConstraint>& getInternalConstraints() const {
+        return internalConstraints;
+    }
+    /** "RigidBodyIntegrator" or "RigidBodyLangevinIntegrator": every message starts with it. */
+    const std::string& getClassName() const {
+        return className;
+    }
     /** Degrees of freedom as the integrator moves the system (see RigidBodyIntegrator::getNumDegreesOfFreedom()). */
     int getNumDegreesOfFreedom() const;
 private:
     void findConstraintBodies(const OpenMM::System& system);
     void checkBody(const OpenMM::System& system, int index);
+    std::string className;
     std::vector<RigidBody> bodies;
+    std::vector<InternalConstraint> internalConstraints;
     std::vector<int> freeParticles, bodyOfParticle;
     std::vector<double> masses;
     std::unique_ptr<OpenMM::System> freeConstraints;

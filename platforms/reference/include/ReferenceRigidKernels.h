@@ -26,6 +26,10 @@ public:
     ReferenceRigidBodyKernel(std::string name, const OpenMM::Platform& platform) : Kernel(name, platform) {
     }
     void project(OpenMM::ContextImpl& context);
+    void projectVelocities(OpenMM::ContextImpl& context);
+    void captureShapes(OpenMM::ContextImpl& context);
+    bool allShapesKnown() const;
+    bool positionsAreCurrent(OpenMM::ContextImpl& context) const;
     double computeKineticEnergy(OpenMM::ContextImpl& context);
     void computeKineticEnergies(OpenMM::ContextImpl& context, double& translational, double& rotational);
     const RigidBodySystem& getBodies() const {
@@ -33,19 +37,28 @@ public:
     }
     /** Writes the seed and the counter of the random numbers. */
     void createCheckpoint(OpenMM::ContextImpl& context, std::ostream& stream) const;
-    void loadCheckpoint(OpenMM::ContextImpl& context, std::istream& stream);
+    void loadCheckpoint(OpenMM::ContextImpl& context, std::istream& stream, int version);
 protected:
     /**
      * Find the bodies of the context's System, set up their dynamics and seed the random numbers
      * (seed 0, as in OpenMM's integrators, asks for one that differs from Context to Context).
      */
     void initializeBodies(OpenMM::ContextImpl& context, const RigidBodyIntegratorBase& integrator, int seed);
-    /** Advance the context's time and step count by dt after a step. */
+    /**
+     * Before a step or a fit: tell the dynamics the periodic box and the largest plausible drift (the
+     * largest nonbonded cutoff, or half the narrowest box width if that is less).
+     */
+    void prepare(OpenMM::ContextImpl& context);
+    /** Advance the context's time and step count by dt after a step, and record the positions it wrote. */
     void finishStep(OpenMM::ContextImpl& context, double dt);
     std::unique_ptr<RigidBodySystem> bodies;
     std::unique_ptr<RigidBodyDynamics> dynamics;
     std::unique_ptr<OpenMM::ThreadPool> threads;
     std::vector<double> masses;
+    /** The positions as this kernel last wrote them (see positionsAreCurrent()). */
+    std::vector<OpenMM::Vec3> writtenPositions;
+    /** The largest nonbonded cutoff in the System, in nm (infinity if none). */
+    double cutoff = 0.0;
     /** The key of the random numbers, and the number of stages that have drawn from it (the counter). */
     uint64_t seed = 0, randomCounter = 0;
 };
@@ -63,7 +76,7 @@ public:
     }
     /** Also writes the thermostat's work. */
     void createCheckpoint(OpenMM::ContextImpl& context, std::ostream& stream) const;
-    void loadCheckpoint(OpenMM::ContextImpl& context, std::istream& stream);
+    void loadCheckpoint(OpenMM::ContextImpl& context, std::istream& stream, int version);
 private:
     double thermostatWork;
 };

@@ -2,12 +2,15 @@
 #include "internal/Splitting.h"
 #include "numerics/StochasticRescaling.h"
 #include "openmm/Context.h"
+#include "openmm/CustomNonbondedForce.h"
+#include "openmm/NonbondedForce.h"
 #include "openmm/OpenMMException.h"
 #include "openmm/reference/ReferencePlatform.h"
 #include "openmm/reference/SimTKOpenMMRealType.h"
 #include <cmath>
 #include <cstdlib>
 #include <istream>
+#include <limits>
 #include <ostream>
 #include <random>
 #include <string>
@@ -44,9 +47,25 @@ void ReferenceRigidBodyKernel<Kernel>::initializeBodies(ContextImpl& context, co
     seed = (chosenSeed != 0 ? (uint64_t) (uint32_t) chosenSeed : ((uint64_t) random_device()() << 32) | random_device()());
     randomCounter = 0;
     const System& system = context.getSystem();
-    bodies.reset(new RigidBodySystem(system, integrator.getExplicitBodies(), integrator.hasExplicitBodies()));
+    bodies.reset(new RigidBodySystem(system, integrator.getExplicitBodies(), integrator.hasExplicitBodies(),
+                                     integrator.getClassName()));
     dynamics.reset(new RigidBodyDynamics(*bodies));
     masses = bodies->getMasses();
+    cutoff = numeric_limits<double>::infinity();
+    double largest = 0.0;
+    for (int f = 0; f < system.getNumForces(); f++) {
+        const Force& force = system.getForce(f);
+        if (const NonbondedForce* nonbonded = dynamic_cast<const NonbondedForce*>(&force)) {
+            if (nonbonded->getNonbondedMethod() != NonbondedForce::NoCutoff)
+                largest = max(largest, nonbonded->getCutoffDistance());
+        }
+        else if (const CustomNonbondedForce* custom = dynamic_cast<const CustomNonbondedForce*>(&force)) {
+            if (custom->getNonbondedMethod() != CustomNonbondedForce::NoCutoff)
+                largest = max(largest, custom->getCutoffDistance());
+        }
+    }
+    if (largest > 0.0)
+        cutoff = largest;
     if (context.getPlatform().getName() == "CPU") {
         int numThreads = atoi(context.getPlatform().getPropertyValue(context.getOwner(), "Threads").c_str());
         if (numThreads > 1) {
@@ -57,9 +76,52 @@ void ReferenceRigidBodyKernel<Kernel>::initializeBodies(ContextImpl& context, co
 }
 
 template <class Kernel>
+void ReferenceRigidBodyKernel<Kernel>::prepare(ContextImpl& context) {
+    double limit = cutoff;
+    string description = "the nonbonded cutoff";
+    if (context.getSystem().usesPeriodicBoundaryConditions()) {
+        Vec3 box[3];
+        context.getPeriodicBoxVectors(box[0], box[1], box[2]);
+        dynamics->setPeriodicBox(box);
+        // The reduced box's widths perpendicular to its faces are a_x, b_y and c_z.
+        double halfWidth = 0.5*min(box[0][0], min(box[1][1], box[2][2]));
+        if (halfWidth < limit) {
+            limit = halfWidth;
+            description = "half the periodic box width";
+        }
+    }
+    else
+        dynamics->setPeriodicBox(NULL);
+    dynamics->setDisplacementLimit(limit, description);
+}
+
+template <class Kernel>
 void ReferenceRigidBodyKernel<Kernel>::project(ContextImpl& context) {
+    prepare(context);
     dynamics->project(extractPositions(context), extractVelocities(context));
     context.computeVirtualSites();
+    writtenPositions = extractPositions(context);
+}
+
+template <class Kernel>
+void ReferenceRigidBodyKernel<Kernel>::projectVelocities(ContextImpl& context) {
+    dynamics->projectVelocities(extractVelocities(context));
+}
+
+template <class Kernel>
+void ReferenceRigidBodyKernel<Kernel>::captureShapes(ContextImpl& context) {
+    prepare(context);
+    dynamics->captureShapes(extractPositions(context));
+}
+
+template <class Kernel>
+bool ReferenceRigidBodyKernel<Kernel>::allShapesKnown() const {
+    return dynamics->allShapesKnown();
+}
+
+template <class Kernel>
+bool ReferenceRigidBodyKernel<Kernel>::positionsAreCurrent(ContextImpl& context) const {
+    return extractPositions(context) == writtenPositions;
 }
 
 template <class Kernel>
@@ -67,6 +129,7 @@ void ReferenceRigidBodyKernel<Kernel>::finishStep(ContextImpl& context, double d
     ReferencePlatform::PlatformData& data = platformData(context);
     data.time += dt;
     data.stepCount++;
+    writtenPositions = *data.positions;
 }
 
 template <class Kernel>
@@ -90,10 +153,10 @@ void ReferenceRigidBodyKernel<Kernel>::createCheckpoint(ContextImpl& context, os
 }
 
 template <class Kernel>
-void ReferenceRigidBodyKernel<Kernel>::loadCheckpoint(ContextImpl& context, istream& stream) {
-    // The integrator's data end the checkpoint: a RigidBodyIntegrator checkpoint from before the
-    // thermostat ends here, and means "no random numbers drawn".
-    if (stream.peek() == char_traits<char>::eof()) {
+void ReferenceRigidBodyKernel<Kernel>::loadCheckpoint(ContextImpl& context, istream& stream, int version) {
+    // Before headers the integrator's data ended the checkpoint: a RigidBodyIntegrator checkpoint
+    // from before the thermostat ends here, and means "no random numbers drawn".
+    if (version == 0 && stream.peek() == char_traits<char>::eof()) {
         stream.clear();
         return;
     }
@@ -101,7 +164,7 @@ void ReferenceRigidBodyKernel<Kernel>::loadCheckpoint(ContextImpl& context, istr
     stream.read((char*) &savedSeed, sizeof(savedSeed));
     stream.read((char*) &savedCounter, sizeof(savedCounter));
     if (!stream)
-        throw OpenMMException("the checkpoint ends within the state of the rigid-body integrator's random numbers");
+        throw OpenMMException(bodies->getClassName() + ": the checkpoint ends within the state of the integrator's random numbers");
     seed = savedSeed;
     randomCounter = savedCounter;
 }
@@ -123,6 +186,7 @@ void ReferenceIntegrateRigidBodyStepKernel::execute(ContextImpl& context, const 
     const SplittingScheme& scheme = splittingScheme(integrator.getSplitting());
     const double dt = integrator.getStepSize(), tolerance = integrator.getConstraintTolerance();
     const RigidBodyIntegrator::RotationMethod method = integrator.getRotationMethod();
+    prepare(context);
     // The first kick uses the forces the context holds; every drift is followed by a force evaluation.
     for (int stage = 0; stage < scheme.numDrifts; stage++) {
         dynamics->kickAndDrift(positions, velocities, forces, scheme.kicks[stage]*dt, scheme.drifts[stage]*dt, method, tolerance);
@@ -150,16 +214,17 @@ void ReferenceIntegrateRigidBodyStepKernel::createCheckpoint(ContextImpl& contex
     stream.write((const char*) &thermostatWork, sizeof(thermostatWork));
 }
 
-void ReferenceIntegrateRigidBodyStepKernel::loadCheckpoint(ContextImpl& context, istream& stream) {
-    if (stream.peek() == char_traits<char>::eof()) {
+void ReferenceIntegrateRigidBodyStepKernel::loadCheckpoint(ContextImpl& context, istream& stream, int version) {
+    if (version == 0 && stream.peek() == char_traits<char>::eof()) {
         stream.clear();
         return;  // written before the thermostat (see the base class)
     }
-    ReferenceRigidBodyKernel<IntegrateRigidBodyStepKernel>::loadCheckpoint(context, stream);
+    ReferenceRigidBodyKernel<IntegrateRigidBodyStepKernel>::loadCheckpoint(context, stream, version);
     double savedWork;
     stream.read((char*) &savedWork, sizeof(savedWork));
     if (!stream)
-        throw OpenMMException("RigidBodyIntegrator: the checkpoint ends within the thermostat's state");
+        throw OpenMMException("RigidBodyIntegrator: the checkpoint ends within the thermostat's state (was it written by a "
+                "RigidBodyLangevinIntegrator?)");
     thermostatWork = savedWork;
 }
 
@@ -176,6 +241,7 @@ void ReferenceIntegrateRigidBodyLangevinStepKernel::execute(ContextImpl& context
     const double dt = integrator.getStepSize(), tolerance = integrator.getConstraintTolerance();
     const double friction = integrator.getFriction();
     const RigidBodyIntegratorBase::RotationMethod method = integrator.getRotationMethod();
+    prepare(context);
     // BAOAB (Leimkuhler and Matthews, 2013), as LangevinMiddleIntegrator: B, A, O, A, force, B. With
     // no friction the O stage is the identity and is left out, so that the step is exactly the
     // constant-energy kick, half drift, half drift, kick.

@@ -1,0 +1,514 @@
+"""The state of a Context with a rigid-body integrator stays coherent with what OpenMM and the user do
+around the steps. Each test compares with an independent answer (mostly a fresh Context with the same
+System set to the same State, whose next steps are the right ones) or expects an OpenMMException:
+
+- force-group queries between steps, updateParametersInContext and CompoundIntegrator switching
+  to another integrator and back leave the trajectory as a fresh Context would run it;
+- explicit bodies are molecules: Context.getMolecules, getState(enforcePeriodicBox=True) and
+  MonteCarloBarostat keep them whole;
+- an explicit body takes its shape when positions are first set (a minimizer afterwards does not
+  reshape it);
+- molecules split across the periodic boundary (positions wrapped atom by atom) move as whole ones;
+- a blow-up raises at the step where it happens;
+- the State right after setVelocities reports the rigid projection of what was set;
+- numpy scalars are accepted wherever stock OpenMM accepts them;
+- checkpoints: one of the other integrator class is refused by name, and checkpoints written by an
+  older build (tests/python/data, made by make_legacy_checkpoints.py) still load and continue;
+- error messages name the class the user made and say what is wrong.
+
+Reference runs in double precision and is compared to rounding; CPU (deterministic forces) to a few
+times the float noise of its forces, measured as 1.4e-8 nm after 10 steps and 3.6e-8 nm after 20 for
+two Contexts that should agree.
+"""
+
+import importlib.util
+import pathlib
+
+import numpy as np
+import openmm
+import openmm.app as app
+import openmm.unit as unit
+import pytest
+
+import systems
+from openmmrigid import RigidBodyIntegrator, RigidBodyLangevinIntegrator
+from systems import make_context, positions_of, velocities_of
+
+PLATFORMS = ["Reference", "CPU"]
+EDGE = 1.5  # nm, the water box
+STEP = 0.002  # ps
+DATA = pathlib.Path(__file__).resolve().parent / "data"
+
+
+def _load_legacy_module():
+    spec = importlib.util.spec_from_file_location("make_legacy_checkpoints", DATA / "make_legacy_checkpoints.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+legacy = _load_legacy_module()
+
+
+# ------------------------------------------------------------------------------------------------
+# Systems, Contexts and measurements
+# ------------------------------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def water():
+    """About 100 TIP3P waters (rigidWater constraints), PME 0.7 nm, equilibrated at 300 K."""
+    return systems.water_box(size=EDGE, cutoff=0.7)
+
+
+def water_molecules(water):
+    return [[atom.index for atom in residue.atoms()] for residue in water.topology.residues()]
+
+
+def explicit_bodies(water):
+    """The water box as explicit bodies: its System without constraints, and one body per water."""
+    system = openmm.XmlSerializer.clone(water.system)
+    while system.getNumConstraints() > 0:
+        system.removeConstraint(system.getNumConstraints() - 1)
+    return system, water_molecules(water)
+
+
+def water_system(water, bodySource):
+    """(System, explicit bodies or None) for bodies found from constraints or given explicitly."""
+    return explicit_bodies(water) if bodySource == "explicit" else (openmm.XmlSerializer.clone(water.system), None)
+
+
+def rigid_integrator(bodies=None, integratorClass=RigidBodyIntegrator):
+    """A RigidBodyIntegrator, or a RigidBodyLangevinIntegrator at 300 K and 1/ps, with explicit bodies
+    or (bodies None) bodies found from the constraints."""
+    arguments = (STEP,) if integratorClass is RigidBodyIntegrator else (300.0, 1.0, STEP)
+    return integratorClass(*arguments, *([bodies] if bodies is not None else []))
+
+
+def started(system, integrator, platformName, positions, velocities=None):
+    context = make_context(system, integrator, platformName)
+    context.setPositions(positions)
+    if velocities is not None:
+        context.setVelocities(velocities)
+    return context
+
+
+def fresh(system, integrator, platformName, state):
+    """The independent answer: a new Context with the same System, set to the State."""
+    context = make_context(system, integrator, platformName)
+    context.setState(state)
+    return context
+
+
+def full_state(context):
+    return context.getState(getPositions=True, getVelocities=True)
+
+
+def tolerance(platformName, reference, cpu):
+    return reference if platformName == "Reference" else cpu
+
+
+def assert_below(**figures):
+    """figures: name=(value, limit). Fails if any value is not below its limit, listing every value."""
+    report = ", ".join(f"{name} {value:.3g} (limit {limit:.0e})" for name, (value, limit) in figures.items())
+    assert all(value < limit for value, limit in figures.values()), report
+
+
+def max_difference(a, b):
+    return np.abs(np.asarray(a) - np.asarray(b)).max()
+
+
+def minimum_image(difference, edge=EDGE):
+    return difference - edge * np.round(difference / edge)
+
+
+def masses_of(system):
+    return np.array([system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles())])
+
+
+def body_distances(positions, bodies):
+    """Every distance between two particles of one body, as they lie (no periodic images)."""
+    return np.array([np.linalg.norm(positions[body[i]] - positions[body[j]])
+                     for body in bodies for i in range(len(body)) for j in range(i + 1, len(body))])
+
+
+def kinetic_energy(context):
+    return context.getState(getEnergy=True).getKineticEnergy().value_in_unit(unit.kilojoule_per_mole)
+
+
+def two_close_waters(water, separation):
+    """Two TIP3P waters of the box (CutoffPeriodic), the second moved so that its oxygen lies
+    `separation` nm from the first's."""
+    modeller = app.Modeller(water.topology, [openmm.Vec3(*x) for x in water.positions] * unit.nanometer)
+    modeller.delete(list(modeller.topology.residues())[2:])
+    system = app.ForceField("amber14/tip3p.xml").createSystem(
+        modeller.topology, nonbondedMethod=app.CutoffPeriodic, nonbondedCutoff=0.6 * unit.nanometer, rigidWater=True)
+    positions = np.array(modeller.positions.value_in_unit(unit.nanometer))
+    positions[3:] += positions[0] - positions[3] + np.array([separation, 0.0, 0.0])
+    return system, positions
+
+
+# ------------------------------------------------------------------------------------------------
+# What happens between steps
+# ------------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("platformName", PLATFORMS)
+def test_force_group_query_between_steps(water, platformName):
+    system, _ = water_system(water, "constraints")
+    restraint = openmm.CustomExternalForce("0.5*k*((x-x0)^2 + (y-y0)^2 + (z-z0)^2)")
+    restraint.addGlobalParameter("k", 1000.0)
+    for name in ("x0", "y0", "z0"):
+        restraint.addPerParticleParameter(name)
+    for i, x in enumerate(water.positions):
+        restraint.addParticle(i, list(x))
+    restraint.setForceGroup(1)
+    system.addForce(restraint)
+    integrator = rigid_integrator()
+    context = started(system, integrator, platformName, water.positions, water.velocities)
+    start = full_state(context)
+    integrator.step(5)
+    context.getState(getForces=True, groups={1})
+    integrator.step(5)
+    unqueried = rigid_integrator()
+    answer = fresh(system, unqueried, platformName, start)
+    unqueried.step(5)
+    unqueried.step(5)
+    assert max_difference(positions_of(context), positions_of(answer)) < tolerance(platformName, 1e-9, 1e-6)
+
+
+@pytest.mark.parametrize("platformName", PLATFORMS)
+def test_update_parameters_in_context(water, platformName):
+    system, _ = water_system(water, "constraints")
+    integrator = rigid_integrator()
+    context = started(system, integrator, platformName, water.positions, water.velocities)
+    integrator.step(5)
+    nonbonded = next(f for f in system.getForces() if isinstance(f, openmm.NonbondedForce))
+    for i in range(nonbonded.getNumParticles()):
+        charge, sigma, epsilon = nonbonded.getParticleParameters(i)
+        nonbonded.setParticleParameters(i, 0.5 * charge, sigma, epsilon)
+    nonbonded.updateParametersInContext(context)
+    updated = full_state(context)
+    integrator.step(10)
+    answerIntegrator = rigid_integrator()
+    answer = fresh(system, answerIntegrator, platformName, updated)
+    answerIntegrator.step(10)
+    assert_below(
+        positions=(max_difference(positions_of(context), positions_of(answer)), tolerance(platformName, 1e-8, 1e-6)),
+        velocities=(max_difference(velocities_of(context), velocities_of(answer)), tolerance(platformName, 1e-6, 1e-4)))
+
+
+@pytest.mark.parametrize("platformName", PLATFORMS)
+def test_compound_integrator_switching_back(water, platformName):
+    compound = openmm.CompoundIntegrator()
+    compound.addIntegrator(rigid_integrator())
+    compound.addIntegrator(openmm.VerletIntegrator(STEP))
+    context = started(water.system, compound, platformName, water.positions, water.velocities)
+    compound.step(5)
+    compound.setCurrentIntegrator(1)
+    compound.step(10)
+    afterVerlet = full_state(context)
+    compound.setCurrentIntegrator(0)
+    compound.step(5)
+    answerIntegrator = rigid_integrator()
+    answer = fresh(water.system, answerIntegrator, platformName, afterVerlet)
+    answerIntegrator.step(5)
+    assert max_difference(positions_of(context), positions_of(answer)) < tolerance(platformName, 1e-8, 1e-6)
+
+
+# ------------------------------------------------------------------------------------------------
+# Explicit bodies are molecules, and keep the shape they were given
+# ------------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("platformName", PLATFORMS)
+def test_explicit_bodies_are_context_molecules(water, platformName):
+    system, bodies = explicit_bodies(water)
+    context = started(system, rigid_integrator(bodies), platformName, water.positions)
+    moleculeOf = {}
+    for index, molecule in enumerate(context.getMolecules()):
+        for particle in molecule:
+            moleculeOf[particle] = index
+    split = [body for body in bodies if len({moleculeOf[i] for i in body}) > 1]
+    assert not split, f"{len(split)} of {len(bodies)} bodies span more than one of Context.getMolecules()"
+
+
+@pytest.mark.parametrize("platformName", PLATFORMS)
+def test_enforce_periodic_box_keeps_explicit_bodies_whole(water, platformName):
+    system, bodies = explicit_bodies(water)
+    context = started(system, rigid_integrator(bodies), platformName, water.positions + 0.5 * EDGE)
+    unwrapped = positions_of(context)
+    wrapped = context.getState(getPositions=True, enforcePeriodicBox=True).getPositions(asNumpy=True)
+    wrapped = wrapped.value_in_unit(unit.nanometer)
+    assert max_difference(body_distances(wrapped, bodies), body_distances(unwrapped, bodies)) < 1e-9
+
+
+@pytest.mark.parametrize("platformName", PLATFORMS)
+def test_barostat_moves_explicit_bodies_as_molecules(water, platformName):
+    """The answer: the same box held by its rigidWater constraints, which the barostat already moves
+    as molecules; the same barostat seed draws the same trial moves for both."""
+    volumes = {}
+    for bodySource in ("explicit", "constraints"):
+        system, bodies = water_system(water, bodySource)
+        barostat = openmm.MonteCarloBarostat(1 * unit.bar, 300 * unit.kelvin, 1)
+        barostat.setRandomNumberSeed(4)
+        system.addForce(barostat)
+        integrator = rigid_integrator(bodies)
+        context = started(system, integrator, platformName, water.positions, water.velocities)
+        volumes[bodySource] = [context.getState().getPeriodicBoxVolume().value_in_unit(unit.nanometer**3)]
+        for _ in range(5):
+            integrator.step(10)
+            volumes[bodySource].append(context.getState().getPeriodicBoxVolume().value_in_unit(unit.nanometer**3))
+        if bodySource == "explicit":
+            distances = body_distances(positions_of(context), bodies)
+            shapeError = max_difference(distances, body_distances(water.positions, bodies))
+    explicit, constrained = np.array(volumes["explicit"]), np.array(volumes["constraints"])
+    assert_below(body_shape=(shapeError, 1e-9), volume_change=(abs(explicit[-1] / explicit[0] - 1), 0.1),
+                 volumes_against_constrained_box=(np.abs(explicit / constrained - 1).max(), 1e-6))
+
+
+@pytest.mark.parametrize("platformName", PLATFORMS)
+def test_explicit_body_shape_from_first_positions(water, platformName):
+    system, bodies = explicit_bodies(water)
+    integrator = rigid_integrator(bodies)
+    shape = body_distances(water.positions, bodies)
+    # The minimizer does not know the bodies: with the atoms free it pulls them out of shape
+    # (by 0.3 to 0.4 nm).
+    atoms = started(system, openmm.VerletIntegrator(STEP), platformName, water.positions)
+    openmm.LocalEnergyMinimizer.minimize(atoms, 10, 50)
+    assert max_difference(body_distances(positions_of(atoms), bodies), shape) > 0.1
+    context = started(system, integrator, platformName, water.positions)
+    openmm.LocalEnergyMinimizer.minimize(context, 10, 50)
+    integrator.step(1)
+    assert max_difference(body_distances(positions_of(context), bodies), shape) < 1e-9
+
+
+@pytest.mark.parametrize("platformName", PLATFORMS)
+@pytest.mark.parametrize("bodySource", ["constraints", "explicit"])
+def test_molecules_split_across_the_boundary(water, bodySource, platformName):
+    system, bodies = water_system(water, bodySource)
+    wrapped = water.positions - EDGE * np.floor(water.positions / EDGE)
+    waters = water_molecules(water)
+    assert max_difference(body_distances(wrapped, waters), body_distances(water.positions, waters)) > 0.5
+    runs = []
+    for positions in (water.positions, wrapped):
+        integrator = rigid_integrator(bodies)
+        context = started(system, integrator, platformName, positions, water.velocities)
+        integrator.step(20)
+        runs.append((positions_of(context), kinetic_energy(context)))
+    (whole, wholeEnergy), (split, splitEnergy) = runs
+    positionTolerance = tolerance(platformName, 1e-8, 1e-6)
+    shapeError = max_difference(body_distances(split, waters), body_distances(whole, waters))
+    assert_below(body_shape=(shapeError, positionTolerance),
+                 positions_minimum_image=(np.abs(minimum_image(split - whole)).max(), positionTolerance),
+                 kinetic_energy_relative=(abs(splitEnergy / wholeEnergy - 1), tolerance(platformName, 1e-8, 1e-6)))
+
+
+@pytest.mark.parametrize("platformName", PLATFORMS)
+@pytest.mark.parametrize("integratorClass", [RigidBodyIntegrator, RigidBodyLangevinIntegrator])
+def test_blow_up_raises_at_that_step(water, integratorClass, platformName):
+    system, positions = two_close_waters(water, 0.02)
+    integrator = rigid_integrator(integratorClass=integratorClass)
+    context = started(system, integrator, platformName, positions)
+    with pytest.raises(openmm.OpenMMException) as error:
+        integrator.step(1)
+        pytest.fail(f"step(1) did not raise; positions reached {np.abs(positions_of(context)).max():.3g} nm")
+    message = str(error.value)
+    assert "unstable" in message and integratorClass.__name__ in message, message
+
+
+@pytest.mark.parametrize("platformName", PLATFORMS)
+def test_state_after_set_velocities_is_projected(water, platformName):
+    # One step first, so that the positions are rigid to rounding and only the velocities are projected.
+    integrator = rigid_integrator()
+    context = started(water.system, integrator, platformName, water.positions, water.velocities)
+    integrator.step(1)
+    masses = masses_of(water.system)
+    rng = np.random.default_rng(17)
+    thermal = rng.normal(size=water.positions.shape) * np.sqrt(systems.BOLTZMANN * 300.0 / masses)[:, None]
+    context.setVelocities(thermal)
+    bodies = [list(integrator.getBodyParticles(b)) for b in range(integrator.getNumBodies())]
+    free = sorted(set(range(len(masses))) - {i for body in bodies for i in body})
+    projected = systems.rigid_motion(masses, positions_of(context), thermal, bodies, free)(0.0)[1]
+    expectedEnergy = 0.5 * np.sum(masses[:, None] * projected**2)
+    for stage in ("after_setVelocities", "after_step0"):
+        if stage == "after_step0":
+            integrator.step(0)
+        state = context.getState(getVelocities=True, getEnergy=True)
+        velocities = state.getVelocities(asNumpy=True).value_in_unit(unit.nanometer / unit.picosecond)
+        energy = state.getKineticEnergy().value_in_unit(unit.kilojoule_per_mole)
+        assert_below(**{f"velocities_{stage}": (max_difference(velocities, projected), 1e-10),
+                        f"kinetic_energy_relative_{stage}": (abs(energy / expectedEnergy - 1), 1e-10)})
+
+
+# ------------------------------------------------------------------------------------------------
+# numpy scalars, as stock OpenMM takes them
+# ------------------------------------------------------------------------------------------------
+
+def _three_particles():
+    system = openmm.System()
+    for mass in (16.0, 1.0, 1.0):
+        system.addParticle(mass)
+    return system
+
+
+def _bound(integrator):
+    """The integrator in a Reference Context of three particles; returns (integrator, context)."""
+    context = openmm.Context(_three_particles(), integrator, openmm.Platform.getPlatformByName("Reference"))
+    context.setPositions(np.array([[0.0, 0.0, 0.0], [0.09572, 0.0, 0.0], [-0.024, 0.0927, 0.0]]))
+    return integrator, context
+
+
+def _steps_taken(integrator, count):
+    integrator, context = _bound(integrator)
+    integrator.step(count)
+    return context.getStepCount()
+
+
+def _body_query(method, index):
+    integrator, context = _bound(RigidBodyIntegrator(STEP, [[0, 1, 2]]))
+    return getattr(integrator, method)(index)
+
+
+def _set_get(target, setter, getter, *values):
+    getattr(target, setter)(*values)
+    return getattr(target, getter)()
+
+
+def _langevin_settings(integrator):
+    return integrator.getTemperature(), integrator.getFriction(), integrator.getStepSize()
+
+
+def _stock_index(n):
+    return _three_particles().getParticleMass(n(0))
+
+
+def _stock_enum(n):
+    return _set_get(openmm.NonbondedForce(), "setNonbondedMethod", "getNonbondedMethod",
+                    n(openmm.NonbondedForce.CutoffPeriodic))
+
+
+def _stock_step_size(n):
+    return openmm.VerletIntegrator(n(STEP)).getStepSize()
+
+
+def _stock_temperature(n):
+    return _set_get(openmm.LangevinMiddleIntegrator(300.0, 1.0, STEP), "setTemperature", "getTemperature", n(310.0))
+
+
+def _stock_seed(n):
+    return _set_get(openmm.LangevinMiddleIntegrator(300.0, 1.0, STEP), "setRandomNumberSeed", "getRandomNumberSeed",
+                    n(5))
+
+
+def _rigid_setting(setter, getter, *values):
+    return _set_get(RigidBodyIntegrator(STEP), setter, getter, *values)
+
+
+# (name, numpy type, stock use, rigid use): a use takes n, which makes each number it passes, and
+# returns what the calls give back. The stock use shows that stock OpenMM takes that numpy type there.
+NUMPY_CASES = [
+    ("step", np.int64, lambda n: _steps_taken(openmm.VerletIntegrator(STEP), n(3)),
+     lambda n: _steps_taken(RigidBodyIntegrator(STEP, [[0, 1, 2]]), n(3))),
+    ("getBodyKind", np.int64, _stock_index, lambda n: _body_query("getBodyKind", n(0))),
+    ("getBodyParticles", np.int32, _stock_index, lambda n: list(_body_query("getBodyParticles", n(0)))),
+    ("getBodyMoments", np.int64, _stock_index, lambda n: _body_query("getBodyMoments", n(0))),
+    ("RigidBodyIntegrator", np.float32, _stock_step_size, lambda n: RigidBodyIntegrator(n(STEP)).getStepSize()),
+    ("RigidBodyIntegrator", np.float64, _stock_step_size, lambda n: RigidBodyIntegrator(n(STEP)).getStepSize()),
+    ("RigidBodyLangevinIntegrator", np.float32,
+     lambda n: _langevin_settings(openmm.LangevinMiddleIntegrator(n(300.0), n(1.0), n(STEP))),
+     lambda n: _langevin_settings(RigidBodyLangevinIntegrator(n(300.0), n(1.0), n(STEP)))),
+    ("setRotationMethod", np.int64, _stock_enum,
+     lambda n: _rigid_setting("setRotationMethod", "getRotationMethod", n(RigidBodyIntegrator.NoSquish))),
+    ("setSplitting", np.int64, _stock_enum,
+     lambda n: _rigid_setting("setSplitting", "getSplitting", n(RigidBodyIntegrator.Omelyan2))),
+    ("setRandomNumberSeed", np.int64, _stock_seed,
+     lambda n: _rigid_setting("setRandomNumberSeed", "getRandomNumberSeed", n(5))),
+    ("setThermostat", np.float32, _stock_temperature,
+     lambda n: _rigid_setting("setThermostat", "getThermostatTemperature", n(310.0), n(0.1))),
+    ("setTemperature", np.float32, _stock_temperature,
+     lambda n: _set_get(RigidBodyLangevinIntegrator(300.0, 1.0, STEP), "setTemperature", "getTemperature", n(310.0))),
+]
+
+
+@pytest.mark.parametrize("scalar, stockUse, rigidUse", [case[1:] for case in NUMPY_CASES],
+                         ids=[f"{case[0]}-{case[1].__name__}" for case in NUMPY_CASES])
+def test_numpy_scalars(scalar, stockUse, rigidUse):
+    try:
+        stockUse(scalar)
+    except TypeError:
+        pytest.skip(f"stock OpenMM does not take a numpy {scalar.__name__} there either")
+    assert rigidUse(scalar) == rigidUse(lambda x: scalar(x).item())
+
+
+# ------------------------------------------------------------------------------------------------
+# Checkpoints
+# ------------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("platformName", PLATFORMS)
+@pytest.mark.parametrize("written, loaded", [("langevin", "plain"), ("plain", "langevin"),
+                                             ("langevin", "thermostat"), ("thermostat", "langevin")])
+def test_checkpoint_of_the_other_class_is_refused(written, loaded, platformName):
+    positions, velocities = legacy.water_positions()
+    writer, writerIntegrator = legacy.legacy_context(written, "constraints", platformName)
+    writer.setPositions(positions)
+    writer.setVelocities(velocities)
+    writerIntegrator.step(2)
+    reader, readerIntegrator = legacy.legacy_context(loaded, "constraints", platformName)
+    with pytest.raises(openmm.OpenMMException) as error:
+        reader.loadCheckpoint(writer.createCheckpoint())
+        readerIntegrator.step(1)
+    message = str(error.value)
+    assert "RigidBodyLangevinIntegrator" in message and "RigidBodyIntegrator" in message, message
+
+
+@pytest.mark.parametrize("bodySource", legacy.BODY_SOURCES)
+@pytest.mark.parametrize("kind", legacy.KINDS)
+def test_legacy_checkpoints_still_load(kind, bodySource):
+    context, integrator = legacy.legacy_context(kind, bodySource)
+    context.loadCheckpoint((DATA / f"{legacy.stem(kind, bodySource)}.chk").read_bytes())
+    integrator.step(legacy.STEPS_AFTER)
+    expected = np.load(DATA / f"{legacy.stem(kind, bodySource)}.npy")
+    assert max_difference(positions_of(context), expected) < 1e-12
+
+
+# ------------------------------------------------------------------------------------------------
+# Messages
+# ------------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("platformName", PLATFORMS)
+@pytest.mark.parametrize("integratorClass", [RigidBodyIntegrator, RigidBodyLangevinIntegrator])
+def test_particle_twice_in_a_body(water, integratorClass, platformName):
+    system, _ = explicit_bodies(water)
+    with pytest.raises(openmm.OpenMMException) as error:
+        make_context(system, rigid_integrator([[0, 1, 0]], integratorClass), platformName)
+    message = str(error.value)
+    assert message.startswith(integratorClass.__name__), message
+    assert "twice" in message
+
+
+@pytest.mark.parametrize("platformName", PLATFORMS)
+def test_langevin_body_constrained_to_a_free_particle(water, platformName):
+    system, bodies = explicit_bodies(water)
+    system.addConstraint(bodies[0][2], bodies[1][0], 0.3)
+    with pytest.raises(openmm.OpenMMException) as error:
+        make_context(system, rigid_integrator(bodies[:1], RigidBodyLangevinIntegrator), platformName)
+    message = str(error.value)
+    assert message.startswith("RigidBodyLangevinIntegrator"), message
+
+
+@pytest.mark.parametrize("platformName", PLATFORMS)
+@pytest.mark.parametrize("ratio, raises", [(1.05, True), (1 + 1e-7, False)], ids=["5%-off", "1e-7-off"])
+def test_constraint_within_an_explicit_body(water, ratio, raises, platformName):
+    """A constraint inside an explicit body must agree with the shape the positions give it."""
+    system, bodies = explicit_bodies(water)
+    oxygen, hydrogen = bodies[0][:2]
+    system.addConstraint(oxygen, hydrogen, ratio * np.linalg.norm(water.positions[oxygen] - water.positions[hydrogen]))
+    integrator = rigid_integrator(bodies)
+    context = make_context(system, integrator, platformName)
+
+    def start():
+        context.setPositions(water.positions)
+        integrator.step(1)
+    if raises:
+        with pytest.raises(openmm.OpenMMException, match="constraint"):
+            start()
+    else:
+        start()
