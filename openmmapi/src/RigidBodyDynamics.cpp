@@ -189,10 +189,13 @@ bool RigidBodyDynamics::shapeBody(int b, const vector<Vec3>& positions, bool str
 }
 
 void RigidBodyDynamics::captureShapes(const vector<Vec3>& positions) {
-    vector<RigidBody>& bodies = system.getBodies();
-    for (size_t b = 0; b < bodies.size(); b++)
-        if (!bodies[b].shapeKnown)
-            shapeBody(b, positions, false);
+    shapeBodies(positions, false);
+}
+
+void RigidBodyDynamics::shapeBodies(const vector<Vec3>& positions, bool strict) {
+    for (size_t b = 0; b < system.getBodies().size(); b++)
+        if (!system.getBodies()[b].shapeKnown)
+            shapeBody(b, positions, strict);
 }
 
 bool RigidBodyDynamics::allShapesKnown() const {
@@ -202,15 +205,8 @@ bool RigidBodyDynamics::allShapesKnown() const {
     return true;
 }
 
-void RigidBodyDynamics::ensureShapes(const vector<Vec3>& positions) {
-    vector<RigidBody>& bodies = system.getBodies();
-    for (size_t b = 0; b < bodies.size(); b++)
-        if (!bodies[b].shapeKnown)
-            shapeBody(b, positions, true);
-}
-
 void RigidBodyDynamics::project(vector<Vec3>& positions, vector<Vec3>& velocities) {
-    ensureShapes(positions);
+    shapeBodies(positions, true);
     for (size_t b = 0; b < states.size(); b++)
         fitBody(b, positions, velocities);
     writtenVelocities = velocities;

@@ -176,8 +176,11 @@ private:
                  RigidBodyIntegratorBase::RotationMethod method, double constraintTolerance);
     /** The free motion of body b for a time h, and its particles placed accordingly. */
     void driftBody(int b, double h, RigidBodyIntegratorBase::RotationMethod method, std::vector<OpenMM::Vec3>& positions);
-    /** Make sure every body has a shape, taking explicit bodies' shapes from these positions. */
-    void ensureShapes(const std::vector<OpenMM::Vec3>& positions);
+    /**
+     * Give every body without a shape the one it has in these positions; those the positions cannot
+     * shape raise the error if strict, else wait.
+     */
+    void shapeBodies(const std::vector<OpenMM::Vec3>& positions, bool strict);
     /**
      * Give body b the shape it has in the positions. If they cannot give one (non-finite, or every
      * particle at one point), throw if strict, else return false.
