@@ -6,7 +6,6 @@
 #include "openmm/OpenMMException.h"
 #include "openmm/internal/ThreadPool.h"
 #include "openmm/reference/ReferenceConstraints.h"
-#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <mutex>
@@ -36,15 +35,15 @@ Vector3 bodyAngularVelocity(const RigidBody& body, const Vector3& bodyAngularMom
     return omega;
 }
 
-/** Throw, naming the integrator, particle and body, unless all three components are finite. */
-void requireFinite(const string& className, const Vec3& v, const char* quantity, int particle, int body) {
-    if (!(isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2])))
-        throw OpenMMException(className + ": particle " + to_string(particle) + " of body " + to_string(body) +
-                " has a non-finite " + quantity);
-}
-
 bool isFinite(const Vec3& v) {
     return isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]);
+}
+
+/** Throw, naming the integrator, particle and body, unless all three components are finite. */
+void requireFinite(const string& className, const Vec3& v, const char* quantity, int particle, int body) {
+    if (!isFinite(v))
+        throw OpenMMException(className + ": particle " + to_string(particle) + " of body " + to_string(body) +
+                " has a non-finite " + quantity);
 }
 
 /** One Newton-Schulz step towards the nearest rotation, A (3 - A^T A) / 2: removes the rounding drift. */
@@ -60,7 +59,7 @@ void reorthonormalize(Matrix3& a) {
 } // namespace
 
 RigidBodyDynamics::RigidBodyDynamics(RigidBodySystem& system) : system(system), periodic(false),
-        displacementLimit(numeric_limits<double>::infinity()), threads(NULL) {
+        displacementLimit(numeric_limits<double>::infinity()), displacementLimitName("no limit"), threads(NULL) {
     states.resize(system.getBodies().size());
     const vector<double>& masses = system.getMasses();
     inverseMasses.resize(masses.size());
@@ -116,7 +115,7 @@ void RigidBodyDynamics::setPeriodicBox(const Vec3* vectors) {
             box[k] = vectors[k];
 }
 
-void RigidBodyDynamics::setDisplacementLimit(double limit, const string& description) {
+void RigidBodyDynamics::setDisplacementLimit(double limit, const char* description) {
     displacementLimit = limit;
     displacementLimitName = description;
 }
@@ -164,28 +163,33 @@ bool RigidBodyDynamics::shapeBody(int b, const vector<Vec3>& positions, bool str
     // A constraint inside the body is implied by its rigidity; one the shape contradicts is a mistake
     // in the System or the positions, not something to drop silently. 1 % allows for positions read
     // from a file with a few digits.
-    for (const RigidBodySystem::InternalConstraint& constraint : system.getInternalConstraints()) {
-        if (constraint.body != b)
-            continue;
-        int i = find(body.particles.begin(), body.particles.end(), constraint.particle1) - body.particles.begin();
-        int j = find(body.particles.begin(), body.particles.end(), constraint.particle2) - body.particles.begin();
-        double distance = sqrt((whole[i] - whole[j]).dot(whole[i] - whole[j]));
+    for (const RigidBodySystem::InternalConstraint& constraint : system.getInternalConstraints(b)) {
+        const Vec3 separation = whole[constraint.first] - whole[constraint.second];
+        double distance = sqrt(separation.dot(separation));
         if (fabs(distance - constraint.distance) > 0.01*constraint.distance)
             throw OpenMMException(className + ": constraint " + to_string(constraint.index) + " holds particles " +
-                    to_string(constraint.particle1) + " and " + to_string(constraint.particle2) + " of body " + to_string(b) +
-                    " at " + to_string(constraint.distance) + " nm, but the positions that give the body its shape put them " +
-                    to_string(distance) + " nm apart; remove the constraint or set positions that satisfy it");
+                    to_string(body.particles[constraint.first]) + " and " + to_string(body.particles[constraint.second]) +
+                    " of body " + to_string(b) + " at " + to_string(constraint.distance) + " nm, but the positions that give "
+                    "the body its shape put them " + to_string(distance) + " nm apart; remove the constraint or set positions "
+                    "that satisfy it");
     }
-    Vector3 center = {0.0, 0.0, 0.0};
+    Vector3 center;
+    vector<Vector3> centred;
+    centre(body, whole, center, centred);
+    body.setShape(centred);
+    return true;
+}
+
+void RigidBodyDynamics::centre(const RigidBody& body, const vector<Vec3>& whole, Vector3& center, vector<Vector3>& centred) const {
+    const int n = body.particles.size();
+    center = {0.0, 0.0, 0.0};
     for (int i = 0; i < n; i++)
         for (int k = 0; k < 3; k++)
             center[k] += body.masses[i]*whole[i][k]/body.mass;
-    vector<Vector3> centred(n);
+    centred.resize(n);
     for (int i = 0; i < n; i++)
         for (int k = 0; k < 3; k++)
             centred[i][k] = whole[i][k] - center[k];
-    body.setShape(centred);
-    return true;
 }
 
 void RigidBodyDynamics::captureShapes(const vector<Vec3>& positions) {
@@ -219,17 +223,11 @@ void RigidBodyDynamics::fitBody(int index, vector<Vec3>& positions, vector<Vec3>
     const int n = body.particles.size();
     vector<Vec3> whole;
     assemble(body, positions, whole);
-    Vector3 center = {0.0, 0.0, 0.0};
-    for (int i = 0; i < n; i++) {
-        const Vec3& r = whole[i];
-        requireFinite(className, r, "position", body.particles[i], index);
-        for (int k = 0; k < 3; k++)
-            center[k] += body.masses[i]*r[k]/body.mass;
-    }
-    vector<Vector3> centred(n);
     for (int i = 0; i < n; i++)
-        for (int k = 0; k < 3; k++)
-            centred[i][k] = whole[i][k] - center[k];
+        requireFinite(className, whole[i], "position", body.particles[i], index);
+    Vector3 center;
+    vector<Vector3> centred;
+    centre(body, whole, center, centred);
     Matrix3 rotation = identityMatrix();  // body to lab
     if (body.kind != RigidBody::Point) {
         double residual;

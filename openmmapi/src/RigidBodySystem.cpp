@@ -1,10 +1,13 @@
 #include "internal/RigidBodySystem.h"
 #include "numerics/SymmetricEigen.h"
 #include "openmm/CMMotionRemover.h"
+#include "openmm/CustomNonbondedForce.h"
+#include "openmm/NonbondedForce.h"
 #include "openmm/OpenMMException.h"
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <map>
 #include <numeric>
 #include <sstream>
@@ -97,6 +100,7 @@ RigidBodySystem::RigidBodySystem(const System& system, const vector<vector<int> 
         checkBody(system, b);
 
     // Constraints inside a body are implied by its rigidity; those among free particles stay.
+    internalConstraints.resize(bodies.size());
     vector<pair<int, int> > kept;
     vector<double> keptDistances;
     for (int c = 0; c < system.getNumConstraints(); c++) {
@@ -108,8 +112,12 @@ RigidBodySystem::RigidBodySystem(const System& system, const vector<vector<int> 
             kept.push_back({i, j});
             keptDistances.push_back(distance);
         }
-        else if (bi == bj)
-            internalConstraints.push_back({c, bi, i, j, distance});
+        else if (bi == bj) {
+            const vector<int>& members = bodies[bi].particles;
+            int first = find(members.begin(), members.end(), i) - members.begin();
+            int second = find(members.begin(), members.end(), j) - members.begin();
+            internalConstraints[bi].push_back({c, first, second, distance});
+        }
         else {
             auto describe = [](int particle, int body) {
                 return "particle " + to_string(particle) + (body == -1 ? " (free)" : " (body " + to_string(body) + ")");
@@ -129,9 +137,21 @@ RigidBodySystem::RigidBodySystem(const System& system, const vector<vector<int> 
     for (int i = 0; i < numParticles; i++)
         if (bodyOfParticle[i] == -1 && masses[i] != 0.0)
             freeParticles.push_back(i);
-    for (int f = 0; f < system.getNumForces(); f++)
-        if (dynamic_cast<const CMMotionRemover*>(&system.getForce(f)) != NULL)
+    double cutoff = 0.0;
+    for (int f = 0; f < system.getNumForces(); f++) {
+        const Force& force = system.getForce(f);
+        if (dynamic_cast<const CMMotionRemover*>(&force) != NULL)
             removesCenterOfMassMotion = true;
+        else if (const NonbondedForce* nonbonded = dynamic_cast<const NonbondedForce*>(&force)) {
+            if (nonbonded->getNonbondedMethod() != NonbondedForce::NoCutoff)
+                cutoff = max(cutoff, nonbonded->getCutoffDistance());
+        }
+        else if (const CustomNonbondedForce* custom = dynamic_cast<const CustomNonbondedForce*>(&force)) {
+            if (custom->getNonbondedMethod() != CustomNonbondedForce::NoCutoff)
+                cutoff = max(cutoff, custom->getCutoffDistance());
+        }
+    }
+    largestCutoff = (cutoff > 0.0 ? cutoff : numeric_limits<double>::infinity());
 }
 
 void RigidBodySystem::findConstraintBodies(const System& system) {

@@ -65,9 +65,9 @@ public:
      * unstable simulation, and the drift stops with an OpenMMException saying so.
      *
      * @param limit        the distance (infinity for none)
-     * @param description  what the distance is, for the message (e.g. "the nonbonded cutoff")
+     * @param description  what the distance is, for the message (a string literal, e.g. "the nonbonded cutoff")
      */
-    void setDisplacementLimit(double limit, const std::string& description);
+    void setDisplacementLimit(double limit, const char* description);
     /**
      * Give every explicit body that has no shape yet the shape it has in these positions, where
      * they place its particles apart and at finite coordinates (the others wait for later positions).
@@ -186,6 +186,8 @@ private:
      * particle at one point), throw if strict, else return false.
      */
     bool shapeBody(int b, const std::vector<OpenMM::Vec3>& positions, bool strict);
+    /** The centre of mass of a body's assembled positions, and the positions about it. */
+    void centre(const RigidBody& body, const std::vector<OpenMM::Vec3>& whole, Vector3& center, std::vector<Vector3>& centred) const;
     /** The positions of a body's particles, each at the periodic image nearest the first particle. */
     void assemble(const RigidBody& body, const std::vector<OpenMM::Vec3>& positions, std::vector<OpenMM::Vec3>& whole) const;
     /** Throw the "unstable" error if a drift would move a body or free particle further than the limit. */
@@ -198,7 +200,7 @@ private:
     bool periodic;
     OpenMM::Vec3 box[3];
     double displacementLimit;
-    std::string displacementLimitName;
+    const char* displacementLimitName;
     std::vector<BodyState> states;
     std::vector<double> inverseMasses;
     std::vector<OpenMM::Vec3> previousPositions;

@@ -49,9 +49,12 @@ public:
      */
     RigidBodySystem(const OpenMM::System& system, const std::vector<std::vector<int> >& explicitBodies, bool useExplicit,
                     const std::string& className);
-    /** A constraint between two particles of one body (implied by its rigidity, checked against its shape). */
+    /**
+     * A constraint between two particles of one body (implied by its rigidity, checked against its
+     * shape): its index in the System, the positions of its particles in the body's list, its length.
+     */
     struct InternalConstraint {
-        int index, body, particle1, particle2;
+        int index, first, second;
         double distance;
     };
     std::vector<RigidBody>& getBodies() {
@@ -75,9 +78,16 @@ public:
     const std::vector<double>& getMasses() const {
         return masses;
     }
-    /** The constraints inside bodies (dropped from the dynamics; an explicit body's shape must agree with them). */
-    const std::vector<InternalConstraint>& getInternalConstraints() const {
-        return internalConstraints;
+    /** The constraints inside body b (dropped from the dynamics; an explicit body's shape must agree with them). */
+    const std::vector<InternalConstraint>& getInternalConstraints(int b) const {
+        return internalConstraints[b];
+    }
+    /**
+     * The largest cutoff of the System's NonbondedForce and CustomNonbondedForce objects, in nm
+     * (infinity if none has one): no particle may move that far in one drift.
+     */
+    double getLargestCutoff() const {
+        return largestCutoff;
     }
     /** "RigidBodyIntegrator" or "RigidBodyLangevinIntegrator": every message starts with it. */
     const std::string& getClassName() const {
@@ -90,12 +100,13 @@ private:
     void checkBody(const OpenMM::System& system, int index);
     std::string className;
     std::vector<RigidBody> bodies;
-    std::vector<InternalConstraint> internalConstraints;
+    std::vector<std::vector<InternalConstraint> > internalConstraints;
     std::vector<int> freeParticles, bodyOfParticle;
     std::vector<double> masses;
     std::unique_ptr<OpenMM::System> freeConstraints;
     int numFreeConstraints = 0;
     bool removesCenterOfMassMotion = false;
+    double largestCutoff;
 };
 
 } // namespace OpenMMRigid

@@ -57,8 +57,8 @@ protected:
     std::vector<double> masses;
     /** The positions as this kernel last wrote them (see positionsAreCurrent()). */
     std::vector<OpenMM::Vec3> writtenPositions;
-    /** The largest nonbonded cutoff in the System, in nm (infinity if none). */
-    double cutoff = 0.0;
+    /** Whether the System is periodic. */
+    bool periodic = false;
     /** The key of the random numbers, and the number of stages that have drawn from it (the counter). */
     uint64_t seed = 0, randomCounter = 0;
 };

@@ -2,15 +2,12 @@
 #include "internal/Splitting.h"
 #include "numerics/StochasticRescaling.h"
 #include "openmm/Context.h"
-#include "openmm/CustomNonbondedForce.h"
-#include "openmm/NonbondedForce.h"
 #include "openmm/OpenMMException.h"
 #include "openmm/reference/ReferencePlatform.h"
 #include "openmm/reference/SimTKOpenMMRealType.h"
 #include <cmath>
 #include <cstdlib>
 #include <istream>
-#include <limits>
 #include <ostream>
 #include <random>
 #include <string>
@@ -51,21 +48,7 @@ void ReferenceRigidBodyKernel<Kernel>::initializeBodies(ContextImpl& context, co
                                      integrator.getClassName()));
     dynamics.reset(new RigidBodyDynamics(*bodies));
     masses = bodies->getMasses();
-    cutoff = numeric_limits<double>::infinity();
-    double largest = 0.0;
-    for (int f = 0; f < system.getNumForces(); f++) {
-        const Force& force = system.getForce(f);
-        if (const NonbondedForce* nonbonded = dynamic_cast<const NonbondedForce*>(&force)) {
-            if (nonbonded->getNonbondedMethod() != NonbondedForce::NoCutoff)
-                largest = max(largest, nonbonded->getCutoffDistance());
-        }
-        else if (const CustomNonbondedForce* custom = dynamic_cast<const CustomNonbondedForce*>(&force)) {
-            if (custom->getNonbondedMethod() != CustomNonbondedForce::NoCutoff)
-                largest = max(largest, custom->getCutoffDistance());
-        }
-    }
-    if (largest > 0.0)
-        cutoff = largest;
+    periodic = system.usesPeriodicBoundaryConditions();
     if (context.getPlatform().getName() == "CPU") {
         int numThreads = atoi(context.getPlatform().getPropertyValue(context.getOwner(), "Threads").c_str());
         if (numThreads > 1) {
@@ -77,9 +60,10 @@ void ReferenceRigidBodyKernel<Kernel>::initializeBodies(ContextImpl& context, co
 
 template <class Kernel>
 void ReferenceRigidBodyKernel<Kernel>::prepare(ContextImpl& context) {
-    double limit = cutoff;
-    string description = "the nonbonded cutoff";
-    if (context.getSystem().usesPeriodicBoundaryConditions()) {
+    double limit = bodies->getLargestCutoff();
+    const char* description = "the nonbonded cutoff";
+    if (periodic) {
+        // The box can change between steps (a barostat).
         Vec3 box[3];
         context.getPeriodicBoxVectors(box[0], box[1], box[2]);
         dynamics->setPeriodicBox(box);
