@@ -79,29 +79,16 @@ public:
      * The sequence of kicks and free drifts that makes one step. Each starts with a kick that reuses
      * the forces from the end of the previous step and evaluates the forces once after every drift.
      */
-    enum Splitting {
-        /** Velocity Verlet: kick dt/2, drift dt, kick dt/2. Second order, one force evaluation per step. */
-        Verlet = 0,
-        /**
-         * The optimized two-stage scheme of Omelyan, Mryglod and Folk (2002): kick lambda dt, drift dt/2,
-         * kick (1 - 2 lambda) dt, drift dt/2, kick lambda dt with lambda = 0.1931833275037836. Second
-         * order with a smaller error than Verlet at the same step; two force evaluations per step.
-         */
-        Omelyan2 = 1,
-        /**
-         * Yoshida's triple jump: Verlet steps of w1 dt, w0 dt and w1 dt with w1 = 1/(2 - 2^(1/3)) and
-         * w0 = 1 - 2 w1 (the middle one backwards in time). Fourth order, with either rotation method
-         * and with constraints; three force evaluations per step.
-         */
-        Yoshida4 = 2,
-        /**
-         * The optimized fourth-order Forest-Ruth-like scheme of Omelyan, Mryglod and Folk (2002), in
-         * its velocity form: five kicks and four drifts; four force evaluations per step. Fourth order
-         * when the drifts are exact: with NoSquish, or for free particles held by constraints (which
-         * drift by SHAKE), it is second order. Yoshida4 is fourth order in both cases.
-         */
-        Omelyan4 = 3
-    };
+    /** The sequence of kicks and drifts of a step (see RigidBodyOptions for each). */
+    typedef RigidBodyOptions::Splitting Splitting;
+    /** Velocity Verlet: kick dt/2, drift dt, kick dt/2. Second order, one force evaluation per step. */
+    static constexpr Splitting Verlet = RigidBodyOptions::Verlet;
+    /** The optimized two-stage scheme of Omelyan, Mryglod and Folk (2002): second order, two force evaluations per step. */
+    static constexpr Splitting Omelyan2 = RigidBodyOptions::Omelyan2;
+    /** Yoshida's fourth-order triple jump: three force evaluations per step. */
+    static constexpr Splitting Yoshida4 = RigidBodyOptions::Yoshida4;
+    /** The optimized fourth-order Forest-Ruth-like scheme of Omelyan, Mryglod and Folk (2002): four force evaluations per step. */
+    static constexpr Splitting Omelyan4 = RigidBodyOptions::Omelyan4;
     /** Get the splitting: the sequence of kicks and drifts that makes one step. */
     Splitting getSplitting() const {
         return splitting;
@@ -168,9 +155,13 @@ public:
         randomNumberSeed = seed;
     }
 protected:
-    std::vector<std::string> getKernelNames();
-    void initializeKernel(OpenMM::ContextImpl& context);
-    void executeKernel(OpenMM::ContextImpl& context);
+    int getRequestedSeed() const {
+        return randomNumberSeed;
+    }
+    bool hasThermostatWork() const {
+        return true;
+    }
+    void executeStep(OpenMM::ContextImpl& context);
 private:
     Splitting splitting;
     bool thermostat;

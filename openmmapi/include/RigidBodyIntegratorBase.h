@@ -1,17 +1,20 @@
 #ifndef OPENMMRIGID_RIGIDBODYINTEGRATORBASE_H_
 #define OPENMMRIGID_RIGIDBODYINTEGRATORBASE_H_
 
+#include "RigidBodyOptions.h"
 #include "openmm/Integrator.h"
 #include "openmm/Kernel.h"
+#include "internal/StepSequence.h"
 #include "internal/windowsExportRigid.h"
 #include <iosfwd>
+#include <memory>
 #include <string>
 #include <vector>
 
 namespace OpenMMRigid {
 
-class RigidBodyStepKernel;
-struct RigidBody;
+class IntegrateRigidBodyStepKernel;
+class RigidBodySystem;
 
 /**
  * What every rigid-body integrator of this plugin has in common: the bodies (found from the
@@ -19,18 +22,19 @@ struct RigidBody;
  * the questions one may ask about them (kinds, moments, kinetic energies, degrees of freedom,
  * temperature), and the step loop of the integrator contract (update the context state, re-fit the
  * bodies if something moved the particles, compute the forces of the integration force groups,
- * execute the kernel). RigidBodyIntegrator (constant energy) and RigidBodyLangevinIntegrator
+ * run the step sequence of internal/StepSequence.h on the platform's kernel). It builds the body
+ * topology (internal/RigidBodySystem.h) once per Context; every question about the bodies is
+ * answered from it, without touching the Context's state. RigidBodyIntegrator (constant energy) and RigidBodyLangevinIntegrator
  * (constant temperature) derive from it; it cannot be created on its own.
  */
 class OPENMM_EXPORT_RIGID RigidBodyIntegratorBase : public OpenMM::Integrator {
 public:
-    /** How the orientation of each body is advanced during the free drift. */
-    enum RotationMethod {
-        /** The exact torque-free motion (van Zon and Schofield, 2007). */
-        Exact = 0,
-        /** The symplectic NO_SQUISH splitting of the free rotation (Miller et al., 2002). */
-        NoSquish = 1
-    };
+    /** How the orientation of each body is advanced during the free drift (see RigidBodyOptions). */
+    typedef RigidBodyOptions::RotationMethod RotationMethod;
+    /** The exact torque-free motion (van Zon and Schofield, 2007). */
+    static constexpr RotationMethod Exact = RigidBodyOptions::Exact;
+    /** The symplectic NO_SQUISH splitting of the free rotation (Miller et al., 2002). */
+    static constexpr RotationMethod NoSquish = RigidBodyOptions::NoSquish;
     /** Get the method used to advance the orientation of each body. */
     RotationMethod getRotationMethod() const {
         return rotationMethod;
@@ -120,36 +124,52 @@ protected:
      * @param bodies     the particle indices of each body
      */
     RigidBodyIntegratorBase(const std::string& className, double stepSize, const std::vector<std::vector<int> >& bodies);
-    /** Create the kernel named by getKernelNames() and have the concrete class initialize it. */
+    ~RigidBodyIntegratorBase();
+    /** Build the body topology, create the kernel and start the step state (seeded by getRequestedSeed()). */
     void initialize(OpenMM::ContextImpl& context);
     void cleanup();
     void stateChanged(OpenMM::State::DataType changed);
+    std::vector<std::string> getKernelNames();
     double computeKineticEnergy();
     bool kineticEnergyRequiresForce() const {
         return false;
     }
-    /** The kernel writes the state of its random numbers (after the positions and velocities OpenMM writes). */
+    /**
+     * After the positions and velocities OpenMM writes: a header (format version, class name), the
+     * seed and counter of the random numbers, and, if hasThermostatWork(), the thermostat's work.
+     */
     void createCheckpoint(std::ostream& stream) const;
     void loadCheckpoint(std::istream& stream);
-    /** Initialize the kernel just created for this integrator (the concrete class knows its type). */
-    virtual void initializeKernel(OpenMM::ContextImpl& context) = 0;
+    /** The integrator's random number seed (0: choose one per Context). */
+    virtual int getRequestedSeed() const = 0;
+    /** Whether the step state's thermostat work belongs to this integrator's checkpoints. */
+    virtual bool hasThermostatWork() const {
+        return false;
+    }
     /**
-     * Take one step with the kernel. On entry the context holds the forces at the current positions
-     * and the bodies agree with them; on exit it holds the forces at the new positions.
+     * Take one step: run the step sequence of the concrete integrator. On entry the context holds
+     * the forces at the current positions and the bodies agree with them; on exit it holds the
+     * forces at the new positions.
      */
-    virtual void executeKernel(OpenMM::ContextImpl& context) = 0;
+    virtual void executeStep(OpenMM::ContextImpl& context) = 0;
     /** The kernel, once the integrator is bound to a Context (throws otherwise). */
-    const RigidBodyStepKernel& getKernel() const;
-    RigidBodyStepKernel& getKernel();
-    OpenMM::Kernel kernel;
+    IntegrateRigidBodyStepKernel& getKernel() const;
+    /** The body topology, once the integrator is bound to a Context (throws otherwise). */
+    const RigidBodySystem& getTopology() const;
+    /** What the step sequence keeps between steps (random numbers, thermostat work). */
+    StepState stepState;
 private:
-    void checkBodies() const;
-    const RigidBody& getShapedBody(int index) const;
+    /** Body b, with its shape (an OpenMMException if it is an explicit body whose positions were never set). */
+    const RigidBodySystem& getShapedBody(int b) const;
+    /** Fit the bodies to the Context's positions (giving explicit bodies their shapes first, strictly). */
+    void projectBodies();
     std::string className;
     std::vector<std::vector<int> > bodies;
     bool explicitBodies;
     RotationMethod rotationMethod;
     bool bound, forcesAreValid, needsProjection;
+    OpenMM::Kernel kernel;
+    std::unique_ptr<RigidBodySystem> topology;
 };
 
 } // namespace OpenMMRigid

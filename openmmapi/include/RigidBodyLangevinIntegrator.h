@@ -119,9 +119,10 @@ public:
         randomNumberSeed = seed;
     }
 protected:
-    std::vector<std::string> getKernelNames();
-    void initializeKernel(OpenMM::ContextImpl& context);
-    void executeKernel(OpenMM::ContextImpl& context);
+    int getRequestedSeed() const {
+        return randomNumberSeed;
+    }
+    void executeStep(OpenMM::ContextImpl& context);
 private:
     double temperature, friction;
     int randomNumberSeed;

@@ -4,8 +4,6 @@
 #include "numerics/Philox.h"
 #include "numerics/SymmetricEigen.h"
 #include "openmm/OpenMMException.h"
-#include "openmm/internal/ThreadPool.h"
-#include "openmm/reference/ReferenceConstraints.h"
 #include <cmath>
 #include <limits>
 #include <mutex>
@@ -27,25 +25,6 @@ Vec3 toVec3(const Vector3& v) {
     return Vec3(v[0], v[1], v[2]);
 }
 
-/** The body-frame angular velocity I^-1 L; a zero moment (the axis of a linear body) carries none. */
-Vector3 bodyAngularVelocity(const RigidBody& body, const Vector3& bodyAngularMomentum) {
-    Vector3 omega;
-    for (int k = 0; k < 3; k++)
-        omega[k] = (body.moments[k] > 0.0 ? bodyAngularMomentum[k]/body.moments[k] : 0.0);
-    return omega;
-}
-
-bool isFinite(const Vec3& v) {
-    return isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]);
-}
-
-/** Throw, naming the integrator, particle and body, unless all three components are finite. */
-void requireFinite(const string& className, const Vec3& v, const char* quantity, int particle, int body) {
-    if (!isFinite(v))
-        throw OpenMMException(className + ": particle " + to_string(particle) + " of body " + to_string(body) +
-                " has a non-finite " + quantity);
-}
-
 /** One Newton-Schulz step towards the nearest rotation, A (3 - A^T A) / 2: removes the rounding drift. */
 void reorthonormalize(Matrix3& a) {
     Matrix3 g = multiplyTransposed(a, a);
@@ -58,22 +37,17 @@ void reorthonormalize(Matrix3& a) {
 
 } // namespace
 
-RigidBodyDynamics::RigidBodyDynamics(RigidBodySystem& system) : system(system), periodic(false),
-        displacementLimit(numeric_limits<double>::infinity()), displacementLimitName("no limit"), threads(NULL) {
-    states.resize(system.getBodies().size());
+RigidBodyDynamics::RigidBodyDynamics(RigidBodySystem& system, HostThreads* threads, HostConstraints* constraints) :
+        system(system), threads(threads), constraints(constraints) {
+    if (system.getFreeConstraintSystem() != NULL && constraints == NULL)
+        throw OpenMMException(system.getClassName() + ": internal error: no solver for the constraints among free particles");
+    if (system.getFreeConstraintSystem() == NULL)
+        this->constraints = NULL;
+    states.resize(system.getNumBodies());
     const vector<double>& masses = system.getMasses();
     inverseMasses.resize(masses.size());
     for (size_t i = 0; i < masses.size(); i++)
         inverseMasses[i] = (masses[i] == 0.0 ? 0.0 : 1.0/masses[i]);
-    if (system.getFreeConstraintSystem() != NULL)
-        constraints.reset(new ReferenceConstraints(*system.getFreeConstraintSystem()));
-}
-
-RigidBodyDynamics::~RigidBodyDynamics() {
-}
-
-void RigidBodyDynamics::setThreadPool(ThreadPool* pool) {
-    threads = pool;
 }
 
 void RigidBodyDynamics::forEachBody(const function<void(int)>& task) {
@@ -96,189 +70,103 @@ void RigidBodyDynamics::forEachBody(const function<void(int)>& task) {
             guarded(b);
     }
     else {
-        threads->execute([&](ThreadPool& pool, int thread) {
-            int begin = (numBodies*(long long) thread)/pool.getNumThreads();
-            int end = (numBodies*(long long) (thread + 1))/pool.getNumThreads();
+        const int numThreads = threads->getNumThreads();
+        threads->execute([&](int thread) {
+            int begin = (numBodies*(long long) thread)/numThreads;
+            int end = (numBodies*(long long) (thread + 1))/numThreads;
             for (int b = begin; b < end; b++)
                 guarded(b);
         });
-        threads->waitForThreads();
     }
     if (!error.empty())
         throw OpenMMException(error);
 }
 
-void RigidBodyDynamics::setPeriodicBox(const Vec3* vectors) {
-    periodic = (vectors != NULL);
-    if (periodic)
-        for (int k = 0; k < 3; k++)
-            box[k] = vectors[k];
+void RigidBodyDynamics::setGeometry(const StepGeometry& newGeometry) {
+    geometry = newGeometry;
 }
 
-void RigidBodyDynamics::setDisplacementLimit(double limit, const char* description) {
-    displacementLimit = limit;
-    displacementLimitName = description;
-}
-
-void RigidBodyDynamics::assemble(const RigidBody& body, const vector<Vec3>& positions, vector<Vec3>& whole) const {
-    // Each particle at the periodic image nearest the body's first particle (a body is far smaller
-    // than half the box), so that a molecule split by the boundary in the positions given is whole.
-    // The box is in OpenMM's reduced form: c, then b, then a removes each component in turn. A
-    // particle already nearest keeps its coordinates bit for bit.
-    const int n = body.particles.size();
-    whole.resize(n);
-    const Vec3& first = positions[body.particles[0]];
-    for (int i = 0; i < n; i++) {
-        Vec3 r = positions[body.particles[i]];
-        if (periodic && i > 0) {
-            for (int k = 2; k >= 0; k--) {
-                double shift = round((r[k] - first[k])/box[k][k]);
-                if (shift != 0.0)
-                    r -= box[k]*shift;
-            }
-        }
-        whole[i] = r;
-    }
-}
-
-bool RigidBodyDynamics::shapeBody(int b, const vector<Vec3>& positions, bool strict) {
-    RigidBody& body = system.getBodies()[b];
-    const string& className = system.getClassName();
-    const int n = body.particles.size();
-    vector<Vec3> whole;
-    assemble(body, positions, whole);
-    bool finite = true, spread = (n == 1);
-    for (int i = 0; i < n; i++) {
-        finite = finite && isFinite(whole[i]);
-        spread = spread || whole[i] != whole[0];
-    }
-    if (!finite || !spread) {
-        if (!strict)
-            return false;
-        for (int i = 0; i < n; i++)
-            requireFinite(className, whole[i], "position", body.particles[i], b);
-        throw OpenMMException(className + ": the particles of body " + to_string(b) + " all sit at one point; "
-                "an explicit body takes its shape from the positions, so set them before using the body");
-    }
-    // A constraint inside the body is implied by its rigidity; one the shape contradicts is a mistake
-    // in the System or the positions, not something to drop silently. 1 % allows for positions read
-    // from a file with a few digits.
-    for (const RigidBodySystem::InternalConstraint& constraint : system.getInternalConstraints(b)) {
-        const Vec3 separation = whole[constraint.first] - whole[constraint.second];
-        double distance = sqrt(separation.dot(separation));
-        if (fabs(distance - constraint.distance) > 0.01*constraint.distance)
-            throw OpenMMException(className + ": constraint " + to_string(constraint.index) + " holds particles " +
-                    to_string(body.particles[constraint.first]) + " and " + to_string(body.particles[constraint.second]) +
-                    " of body " + to_string(b) + " at " + to_string(constraint.distance) + " nm, but the positions that give "
-                    "the body its shape put them " + to_string(distance) + " nm apart; remove the constraint or set positions "
-                    "that satisfy it");
-    }
-    Vector3 center;
-    vector<Vector3> centred;
-    centre(body, whole, center, centred);
-    body.setShape(centred);
-    return true;
-}
-
-void RigidBodyDynamics::centre(const RigidBody& body, const vector<Vec3>& whole, Vector3& center, vector<Vector3>& centred) const {
-    const int n = body.particles.size();
-    center = {0.0, 0.0, 0.0};
-    for (int i = 0; i < n; i++)
-        for (int k = 0; k < 3; k++)
-            center[k] += body.masses[i]*whole[i][k]/body.mass;
-    centred.resize(n);
-    for (int i = 0; i < n; i++)
-        for (int k = 0; k < 3; k++)
-            centred[i][k] = whole[i][k] - center[k];
-}
-
-void RigidBodyDynamics::captureShapes(const vector<Vec3>& positions) {
-    shapeBodies(positions, false);
-}
-
-void RigidBodyDynamics::shapeBodies(const vector<Vec3>& positions, bool strict) {
-    for (size_t b = 0; b < system.getBodies().size(); b++)
-        if (!system.getBodies()[b].shapeKnown)
-            shapeBody(b, positions, strict);
-}
-
-bool RigidBodyDynamics::allShapesKnown() const {
-    for (const RigidBody& body : system.getBodies())
-        if (!body.shapeKnown)
-            return false;
-    return true;
+Vector3 RigidBodyDynamics::bodyAngularVelocity(int b, const Vector3& bodyAngularMomentum) const {
+    const Vector3& moments = system.getMoments(b);
+    Vector3 omega;
+    for (int k = 0; k < 3; k++)
+        omega[k] = (moments[k] > 0.0 ? bodyAngularMomentum[k]/moments[k] : 0.0);
+    return omega;
 }
 
 void RigidBodyDynamics::project(vector<Vec3>& positions, vector<Vec3>& velocities) {
-    shapeBodies(positions, true);
     for (size_t b = 0; b < states.size(); b++)
         fitBody(b, positions, velocities);
     writtenVelocities = velocities;
 }
 
-void RigidBodyDynamics::fitBody(int index, vector<Vec3>& positions, vector<Vec3>& velocities) {
-    RigidBody& body = system.getBodies()[index];
-    BodyState& state = states[index];
-    const string& className = system.getClassName();
-    const int n = body.particles.size();
-    vector<Vec3> whole;
-    assemble(body, positions, whole);
+void RigidBodyDynamics::fitBody(int b, vector<Vec3>& positions, vector<Vec3>& velocities) {
+    BodyState& state = states[b];
+    const int n = system.getBodySize(b);
+    const int* members = system.getBodyParticles(b);
+    if (!system.isShapeKnown(b))
+        throw OpenMMException(system.getClassName() + ": internal error: body " + to_string(b) + " is fitted before it has a shape");
+    whole.resize(n);
+    system.assemble(b, positions, geometry, whole.data());
     for (int i = 0; i < n; i++)
-        requireFinite(className, whole[i], "position", body.particles[i], index);
-    Vector3 center;
-    vector<Vector3> centred;
-    centre(body, whole, center, centred);
+        system.requireFinite(whole[i], "position", members[i], b);
+    const Vector3 center = system.centreOfMass(b, whole.data());
+    centred.resize(n);
+    for (int i = 0; i < n; i++)
+        for (int k = 0; k < 3; k++)
+            centred[i][k] = whole[i][k] - center[k];
     Matrix3 rotation = identityMatrix();  // body to lab
-    if (body.kind != RigidBody::Point) {
+    if (system.getKind(b) != PointBody) {
+        vector<Vector3> shape(system.getBodyCoordinates(b), system.getBodyCoordinates(b) + n);
+        vector<double> weights(n);
+        for (int i = 0; i < n; i++)
+            weights[i] = system.getMasses()[members[i]];
         double residual;
-        rotation = bestFitRotation(body.bodyCoordinates, centred, body.masses, residual);
-        if (body.handednessOpen) {
-            vector<Vector3> mirrored = body.bodyCoordinates;
-            for (Vector3& x : mirrored)
+        rotation = bestFitRotation(shape, centred, weights, residual);
+        if (system.isHandednessOpen(b)) {
+            for (Vector3& x : shape)
                 x[2] = -x[2];
             double mirroredResidual;
-            Matrix3 mirroredRotation = bestFitRotation(mirrored, centred, body.masses, mirroredResidual);
-            if (mirroredResidual < residual) {
-                body.bodyCoordinates = mirrored;
+            Matrix3 mirroredRotation = bestFitRotation(shape, centred, weights, mirroredResidual);
+            bool mirror = (mirroredResidual < residual);
+            if (mirror)
                 rotation = mirroredRotation;
-            }
-            body.handednessOpen = false;
+            system.settleHandedness(b, mirror);
         }
     }
     state.center = center;
     state.attitude = transpose(rotation);
+    const Vector3* coordinates = system.getBodyCoordinates(b);
     for (int i = 0; i < n; i++)
-        positions[body.particles[i]] = toVec3(center) + toVec3(multiply(rotation, body.bodyCoordinates[i]));
-    projectBodyVelocities(index, velocities);
+        positions[members[i]] = toVec3(center) + toVec3(multiply(rotation, coordinates[i]));
+    projectBodyVelocities(b, velocities);
 }
 
-void RigidBodyDynamics::projectBodyVelocities(int index, vector<Vec3>& velocities) {
+void RigidBodyDynamics::projectBodyVelocities(int b, vector<Vec3>& velocities) {
     // The rigid motion with the linear and angular momentum of the velocities about the fitted shape.
-    const RigidBody& body = system.getBodies()[index];
-    BodyState& state = states[index];
-    const int n = body.particles.size();
-    Vector3 velocity = {0.0, 0.0, 0.0};
-    for (int i = 0; i < n; i++) {
-        const Vec3& v = velocities[body.particles[i]];
-        requireFinite(system.getClassName(), v, "velocity", body.particles[i], index);
-        for (int k = 0; k < 3; k++)
-            velocity[k] += body.masses[i]*v[k]/body.mass;
-    }
+    BodyState& state = states[b];
+    const int n = system.getBodySize(b);
+    const int* members = system.getBodyParticles(b);
+    const vector<double>& masses = system.getMasses();
+    for (int i = 0; i < n; i++)
+        system.requireFinite(velocities[members[i]], "velocity", members[i], b);
+    const Vector3 velocity = system.centreOfMass(b, velocities);
     state.velocity = velocity;
     const Matrix3 rotation = transpose(state.attitude);
+    const Vector3* coordinates = system.getBodyCoordinates(b);
     Vector3 angularMomentum = {0.0, 0.0, 0.0};
-    vector<Vector3> arms(n);
+    arms.resize(n);
     for (int i = 0; i < n; i++) {
-        arms[i] = multiply(rotation, body.bodyCoordinates[i]);
-        Vector3 relative = toVector(velocities[body.particles[i]] - toVec3(velocity));
+        arms[i] = multiply(rotation, coordinates[i]);
+        Vector3 relative = toVector(velocities[members[i]] - toVec3(velocity));
         Vector3 moment = cross(arms[i], relative);
         for (int k = 0; k < 3; k++)
-            angularMomentum[k] += body.masses[i]*moment[k];
+            angularMomentum[k] += masses[members[i]]*moment[k];
     }
     state.angularMomentum = angularMomentum;
-    Vector3 omega = multiplyTransposed(state.attitude, bodyAngularVelocity(body, multiply(state.attitude, angularMomentum)));
+    Vector3 omega = multiplyTransposed(state.attitude, bodyAngularVelocity(b, multiply(state.attitude, angularMomentum)));
     for (int i = 0; i < n; i++)
-        velocities[body.particles[i]] = toVec3(velocity) + toVec3(cross(omega, arms[i]));
+        velocities[members[i]] = toVec3(velocity) + toVec3(cross(omega, arms[i]));
 }
 
 void RigidBodyDynamics::projectVelocities(vector<Vec3>& velocities) {
@@ -287,19 +175,21 @@ void RigidBodyDynamics::projectVelocities(vector<Vec3>& velocities) {
     writtenVelocities = velocities;
 }
 
-void RigidBodyDynamics::rotate(const RigidBody& body, BodyState& state, double dt, RigidBodyIntegratorBase::RotationMethod method) const {
-    Vector3 bodyMomentum = multiply(state.attitude, state.angularMomentum);
-    if (body.kind == RigidBody::Point)
+void RigidBodyDynamics::rotate(int b, double dt, RigidBodyOptions::RotationMethod method) {
+    BodyState& state = states[b];
+    const RigidBodyKind kind = system.getKind(b);
+    if (kind == PointBody)
         return;
+    Vector3 bodyMomentum = multiply(state.attitude, state.angularMomentum);
     // A linear body's free motion is a uniform rotation about L, which both methods take exactly:
     // NO_SQUISH's turns about the perpendicular axes would move part of L onto the molecular axis,
     // where the body can carry none.
-    if (method == RigidBodyIntegratorBase::NoSquish && body.kind != RigidBody::Linear)
-        noSquishRotate(body.moments, dt, state.attitude, bodyMomentum);
+    if (method == RigidBodyOptions::NoSquish && kind != LinearBody)
+        noSquishRotate(system.getMoments(b), dt, state.attitude, bodyMomentum);
     else {
         // The attitude is kept orthonormal here and the momenta were checked finite in kickAndDrift().
-        Vector3 omega = bodyAngularVelocity(body, bodyMomentum);
-        FreeRotor::advance(body.moments, omega, state.attitude, dt, false);
+        Vector3 omega = bodyAngularVelocity(b, bodyMomentum);
+        FreeRotor::advance(system.getMoments(b), omega, state.attitude, dt, false);
     }
     reorthonormalize(state.attitude);
 }
@@ -310,71 +200,62 @@ void RigidBodyDynamics::refreshMomenta(int b, const vector<Vec3>& positions, con
     // step, a slow systematic drift. So they are rebuilt only when the velocities were changed, and
     // the changed velocities are then recorded as seen: the later stages of the step must keep the
     // momenta their kicks made, not rebuild them again from velocities that are now out of date.
-    const RigidBody& body = system.getBodies()[b];
     BodyState& state = states[b];
-    const int n = body.particles.size();
+    const int n = system.getBodySize(b);
+    const int* members = system.getBodyParticles(b);
     bool changed = false;
     for (int i = 0; i < n && !changed; i++)
-        changed = (velocities[body.particles[i]] != writtenVelocities[body.particles[i]]);
+        changed = (velocities[members[i]] != writtenVelocities[members[i]]);
     if (!changed)
         return;
-    Vec3 momentum, angularMomentum;
-    for (int i = 0; i < n; i++)
-        momentum += velocities[body.particles[i]]*body.masses[i];
-    Vec3 velocity = momentum/body.mass;
+    const vector<double>& masses = system.getMasses();
+    const Vec3 velocity = toVec3(system.centreOfMass(b, velocities));
+    Vec3 angularMomentum;
     for (int i = 0; i < n; i++) {
-        int p = body.particles[i];
-        angularMomentum += (positions[p] - toVec3(state.center)).cross(velocities[p] - velocity)*body.masses[i];
+        int p = members[i];
+        angularMomentum += (positions[p] - toVec3(state.center)).cross(velocities[p] - velocity)*masses[p];
     }
     state.velocity = toVector(velocity);
     state.angularMomentum = toVector(angularMomentum);
     for (int i = 0; i < n; i++)
-        writtenVelocities[body.particles[i]] = velocities[body.particles[i]];
+        writtenVelocities[members[i]] = velocities[members[i]];
 }
 
-void RigidBodyDynamics::forceAndTorque(const RigidBody& body, const BodyState& state, const vector<Vec3>& positions,
-                                       const vector<Vec3>& forces, Vec3& force, Vec3& torque) const {
+void RigidBodyDynamics::forceAndTorque(int b, const vector<Vec3>& positions, const vector<Vec3>& forces, Vec3& force, Vec3& torque) const {
+    const BodyState& state = states[b];
+    const int n = system.getBodySize(b);
+    const int* members = system.getBodyParticles(b);
     force = torque = Vec3();
-    for (size_t i = 0; i < body.particles.size(); i++) {
-        int p = body.particles[i];
+    for (int i = 0; i < n; i++) {
+        int p = members[i];
         force += forces[p];
         torque += (positions[p] - toVec3(state.center)).cross(forces[p]);
     }
 }
 
-void RigidBodyDynamics::driftBody(int b, double h, RigidBodyIntegratorBase::RotationMethod method, vector<Vec3>& positions) {
-    const RigidBody& body = system.getBodies()[b];
+void RigidBodyDynamics::driftBody(int b, double h, RigidBodyOptions::RotationMethod method, vector<Vec3>& positions) {
     BodyState& state = states[b];
     for (int k = 0; k < 3; k++)
         state.center[k] += h*state.velocity[k];
-    rotate(body, state, h, method);
-    for (size_t i = 0; i < body.particles.size(); i++)
-        positions[body.particles[i]] = toVec3(state.center) + toVec3(multiplyTransposed(state.attitude, body.bodyCoordinates[i]));
+    rotate(b, h, method);
+    const int n = system.getBodySize(b);
+    const int* members = system.getBodyParticles(b);
+    const Vector3* coordinates = system.getBodyCoordinates(b);
+    for (int i = 0; i < n; i++)
+        positions[members[i]] = toVec3(state.center) + toVec3(multiplyTransposed(state.attitude, coordinates[i]));
 }
 
 void RigidBodyDynamics::kickAndDrift(vector<Vec3>& positions, vector<Vec3>& velocities, const vector<Vec3>& forces,
-                                     double kick, double drift, RigidBodyIntegratorBase::RotationMethod method,
+                                     double kick, double drift, RigidBodyOptions::RotationMethod method,
                                      double constraintTolerance) {
-    advance(positions, velocities, &forces, kick, drift, method, constraintTolerance);
-}
-
-void RigidBodyDynamics::drift(vector<Vec3>& positions, vector<Vec3>& velocities, double drift,
-                              RigidBodyIntegratorBase::RotationMethod method, double constraintTolerance) {
-    advance(positions, velocities, NULL, 0.0, drift, method, constraintTolerance);
-}
-
-void RigidBodyDynamics::advance(vector<Vec3>& positions, vector<Vec3>& velocities, const vector<Vec3>* forces,
-                                double kick, double drift, RigidBodyIntegratorBase::RotationMethod method,
-                                double constraintTolerance) {
-    const vector<RigidBody>& bodies = system.getBodies();
+    const bool kicks = (kick != 0.0);
     forEachBody([&](int b) {
-        const RigidBody& body = bodies[b];
         BodyState& state = states[b];
         refreshMomenta(b, positions, velocities);
-        if (forces != NULL) {
+        if (kicks) {
             Vec3 force, torque;
-            forceAndTorque(body, state, positions, *forces, force, torque);
-            Vec3 velocity = toVec3(state.velocity) + force*(kick/body.mass);
+            forceAndTorque(b, positions, forces, force, torque);
+            Vec3 velocity = toVec3(state.velocity) + force*(kick/system.getBodyMass(b));
             Vec3 angularMomentum = toVec3(state.angularMomentum) + torque*kick;
             if (!(isfinite(velocity.dot(velocity)) && isfinite(angularMomentum.dot(angularMomentum))))
                 throw OpenMMException(system.getClassName() + ": body " + to_string(b) + " has a non-finite velocity, force or "
@@ -388,8 +269,8 @@ void RigidBodyDynamics::advance(vector<Vec3>& positions, vector<Vec3>& velocitie
     });
     const vector<int>& free = system.getFreeParticles();
     for (int p : free) {
-        if (forces != NULL)
-            velocities[p] += (*forces)[p]*(kick*inverseMasses[p]);
+        if (kicks)
+            velocities[p] += forces[p]*(kick*inverseMasses[p]);
         checkDisplacement("particle", p, sqrt(velocities[p].dot(velocities[p]))*fabs(drift), drift);
     }
     if (constraints)
@@ -405,12 +286,12 @@ void RigidBodyDynamics::advance(vector<Vec3>& positions, vector<Vec3>& velocitie
 
 void RigidBodyDynamics::checkDisplacement(const char* what, int index, double distance, double drift) const {
     // Not "distance > limit": a NaN distance must stop the step too.
-    if (distance <= displacementLimit)
+    if (distance <= geometry.displacementLimit)
         return;
     stringstream text;
     text << system.getClassName() << ": " << what << " " << index << " would move " << distance << " nm in one drift of " <<
-            fabs(drift) << " ps, more than " << displacementLimitName << " (" << displacementLimit << " nm); the simulation "
-            "is unstable (try a smaller step size, or minimize the energy first)";
+            fabs(drift) << " ps, more than " << geometry.displacementLimitName << " (" << geometry.displacementLimit <<
+            " nm); the simulation is unstable (try a smaller step size, or minimize the energy first)";
     throw OpenMMException(text.str());
 }
 
@@ -419,12 +300,10 @@ void RigidBodyDynamics::thermalize(vector<Vec3>& positions, vector<Vec3>& veloci
     // The exact Ornstein-Uhlenbeck flow: the mean decays by c, and the variance goes from its
     // starting value s to c^2 s + (1 - c^2) m kT, so the canonical variance m kT stays fixed.
     const double noise = sqrt((1.0 - c*c)*kT);
-    const vector<RigidBody>& bodies = system.getBodies();
     forEachBody([&](int b) {
-        const RigidBody& body = bodies[b];
         BodyState& state = states[b];
         NormalStream normal(seed, b, step);
-        const double velocityNoise = noise/sqrt(body.mass);
+        const double velocityNoise = noise/sqrt(system.getBodyMass(b));
         for (int k = 0; k < 3; k++)
             state.velocity[k] = c*state.velocity[k] + velocityNoise*normal.next();
         // In the principal frame the rotational kinetic energy is sum L_k^2 / (2 I_k): each component
@@ -438,15 +317,16 @@ void RigidBodyDynamics::thermalize(vector<Vec3>& positions, vector<Vec3>& veloci
         Vector3 xi;
         for (int k = 0; k < 3; k++)
             xi[k] = normal.next();
-        if (body.kind != RigidBody::Point) {
+        if (system.getKind(b) != PointBody) {
+            const Vector3& moments = system.getMoments(b);
             Vector3 bodyMomentum = multiply(state.attitude, state.angularMomentum), bodyXi = multiply(state.attitude, xi);
             for (int k = 0; k < 3; k++)
-                bodyMomentum[k] = c*bodyMomentum[k] + noise*sqrt(body.moments[k])*bodyXi[k];
+                bodyMomentum[k] = c*bodyMomentum[k] + noise*sqrt(moments[k])*bodyXi[k];
             state.angularMomentum = multiplyTransposed(state.attitude, bodyMomentum);
         }
     });
     const vector<int>& free = system.getFreeParticles();
-    const uint32_t firstStream = bodies.size();
+    const uint32_t firstStream = system.getNumBodies();
     for (size_t i = 0; i < free.size(); i++) {
         int p = free[i];
         NormalStream normal(seed, firstStream + i, step);
@@ -458,15 +338,14 @@ void RigidBodyDynamics::thermalize(vector<Vec3>& positions, vector<Vec3>& veloci
         constraints->applyToVelocities(positions, velocities, inverseMasses, constraintTolerance);
 }
 
-void RigidBodyDynamics::scaleVelocities(vector<Vec3>& velocities, double alpha) {
+void RigidBodyDynamics::scaleMomenta(vector<Vec3>& velocities, double alpha) {
     for (BodyState& state : states)
         for (int k = 0; k < 3; k++) {
             state.velocity[k] *= alpha;
             state.angularMomentum[k] *= alpha;
         }
-    for (const RigidBody& body : system.getBodies())
-        for (int p : body.particles)
-            velocities[p] *= alpha;
+    for (int p : system.getParticles())
+        velocities[p] *= alpha;
     for (int p : system.getFreeParticles())
         velocities[p] *= alpha;
     writtenVelocities = velocities;
@@ -474,22 +353,22 @@ void RigidBodyDynamics::scaleVelocities(vector<Vec3>& velocities, double alpha) 
 
 void RigidBodyDynamics::closingKick(vector<Vec3>& positions, vector<Vec3>& velocities, const vector<Vec3>& forces,
                                     double kick, double constraintTolerance) {
-    const vector<RigidBody>& bodies = system.getBodies();
     forEachBody([&](int b) {
-        const RigidBody& body = bodies[b];
         BodyState& state = states[b];
         Vec3 force, torque;
-        forceAndTorque(body, state, positions, forces, force, torque);
+        forceAndTorque(b, positions, forces, force, torque);
         // (This rounds as kickAndDrift's kick, force*(kick/mass), does not; both are kept as they were
         // when the two were the halves of the Verlet step, so that its trajectories stay bit for bit.)
+        const double mass = system.getBodyMass(b);
         for (int k = 0; k < 3; k++) {
-            state.velocity[k] += kick*force[k]/body.mass;
+            state.velocity[k] += kick*force[k]/mass;
             state.angularMomentum[k] += kick*torque[k];
         }
-        Vector3 omega = multiplyTransposed(state.attitude,
-                bodyAngularVelocity(body, multiply(state.attitude, state.angularMomentum)));
-        for (size_t i = 0; i < body.particles.size(); i++) {
-            int p = body.particles[i];
+        Vector3 omega = multiplyTransposed(state.attitude, bodyAngularVelocity(b, multiply(state.attitude, state.angularMomentum)));
+        const int n = system.getBodySize(b);
+        const int* members = system.getBodyParticles(b);
+        for (int i = 0; i < n; i++) {
+            int p = members[i];
             velocities[p] = toVec3(state.velocity) + toVec3(omega).cross(positions[p] - toVec3(state.center));
         }
     });
@@ -503,20 +382,27 @@ void RigidBodyDynamics::closingKick(vector<Vec3>& positions, vector<Vec3>& veloc
 void RigidBodyDynamics::computeKineticEnergies(const vector<Vec3>& velocities, double& translational, double& rotational) const {
     translational = 0.0;
     rotational = 0.0;
-    for (const RigidBody& body : system.getBodies()) {
-        Vec3 momentum;
-        for (size_t i = 0; i < body.particles.size(); i++)
-            momentum += velocities[body.particles[i]]*body.masses[i];
-        Vec3 velocity = momentum/body.mass;
-        translational += 0.5*body.mass*velocity.dot(velocity);
-        for (size_t i = 0; i < body.particles.size(); i++) {
-            Vec3 relative = velocities[body.particles[i]] - velocity;
-            rotational += 0.5*body.masses[i]*relative.dot(relative);
+    const vector<double>& masses = system.getMasses();
+    for (int b = 0; b < system.getNumBodies(); b++) {
+        const Vec3 velocity = toVec3(system.centreOfMass(b, velocities));
+        translational += 0.5*system.getBodyMass(b)*velocity.dot(velocity);
+        const int n = system.getBodySize(b);
+        const int* members = system.getBodyParticles(b);
+        for (int i = 0; i < n; i++) {
+            Vec3 relative = velocities[members[i]] - velocity;
+            rotational += 0.5*masses[members[i]]*relative.dot(relative);
         }
     }
-    const vector<double>& masses = system.getMasses();
     for (int p : system.getFreeParticles())
         translational += 0.5*masses[p]*velocities[p].dot(velocities[p]);
+}
+
+double RigidBodyDynamics::computeKineticEnergy(const vector<Vec3>& velocities) const {
+    const vector<double>& masses = system.getMasses();
+    double energy = 0.0;
+    for (size_t i = 0; i < masses.size(); i++)
+        energy += 0.5*masses[i]*velocities[i].dot(velocities[i]);
+    return energy;
 }
 
 } // namespace OpenMMRigid

@@ -1,5 +1,5 @@
 #include "RigidBodyIntegrator.h"
-#include "RigidBodyKernels.h"
+#include "internal/StepSequence.h"
 #include "internal/Splitting.h"
 #include "openmm/OpenMMException.h"
 #include "openmm/internal/ContextImpl.h"
@@ -45,21 +45,11 @@ void RigidBodyIntegrator::setThermostat(double temperature, double collisionTime
 
 double RigidBodyIntegrator::getThermostatWork() {
     getKernel();  // throws unless bound
-    return kernel.getAs<IntegrateRigidBodyStepKernel>().getThermostatWork();
+    return stepState.thermostatWork;
 }
 
-vector<string> RigidBodyIntegrator::getKernelNames() {
-    vector<string> names;
-    names.push_back(IntegrateRigidBodyStepKernel::Name());
-    return names;
-}
-
-void RigidBodyIntegrator::initializeKernel(ContextImpl& context) {
-    kernel.getAs<IntegrateRigidBodyStepKernel>().initialize(context, *this);
-}
-
-void RigidBodyIntegrator::executeKernel(ContextImpl& context) {
-    kernel.getAs<IntegrateRigidBodyStepKernel>().execute(context, *this);
+void RigidBodyIntegrator::executeStep(ContextImpl& context) {
+    stepRigidBodyIntegrator(context, getKernel(), *this, getTopology(), stepState);
 }
 
 } // namespace OpenMMRigid

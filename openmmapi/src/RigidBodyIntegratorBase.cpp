@@ -2,6 +2,7 @@
 #include "RigidBodyKernels.h"
 #include "internal/RigidBodyMolecules.h"
 #include "internal/RigidBodySystem.h"
+#include "internal/StepSequence.h"
 #include "openmm/Context.h"
 #include "openmm/OpenMMException.h"
 #include "openmm/internal/ContextImpl.h"
@@ -41,45 +42,52 @@ void RigidBodyIntegratorBase::setRotationMethod(RotationMethod method) {
     rotationMethod = method;
 }
 
-const RigidBodyStepKernel& RigidBodyIntegratorBase::getKernel() const {
-    if (!bound)
-        throw OpenMMException(className + ": this information is available once the integrator is bound to a Context");
-    return kernel.getAs<const RigidBodyStepKernel>();
+RigidBodyIntegratorBase::~RigidBodyIntegratorBase() {
 }
 
-RigidBodyStepKernel& RigidBodyIntegratorBase::getKernel() {
+IntegrateRigidBodyStepKernel& RigidBodyIntegratorBase::getKernel() const {
     if (!bound)
         throw OpenMMException(className + ": this information is available once the integrator is bound to a Context");
-    return kernel.getAs<RigidBodyStepKernel>();
+    return const_cast<Kernel&>(kernel).getAs<IntegrateRigidBodyStepKernel>();
+}
+
+const RigidBodySystem& RigidBodyIntegratorBase::getTopology() const {
+    if (!bound)
+        throw OpenMMException(className + ": this information is available once the integrator is bound to a Context");
+    return *topology;
+}
+
+vector<string> RigidBodyIntegratorBase::getKernelNames() {
+    return {IntegrateRigidBodyStepKernel::Name()};
 }
 
 int RigidBodyIntegratorBase::getNumBodies() const {
-    return getKernel().getBodies().getBodies().size();
+    return getTopology().getNumBodies();
 }
 
 vector<int> RigidBodyIntegratorBase::getBodyParticles(int index) const {
-    const vector<RigidBody>& all = getKernel().getBodies().getBodies();
-    if (index < 0 || index >= (int) all.size())
+    const RigidBodySystem& all = getTopology();
+    if (index < 0 || index >= all.getNumBodies())
         throw OpenMMException(className + ": body index " + to_string(index) + " out of range (there are " +
-                to_string(all.size()) + " bodies)");
-    return all[index].particles;
+                to_string(all.getNumBodies()) + " bodies)");
+    return vector<int>(all.getBodyParticles(index), all.getBodyParticles(index) + all.getBodySize(index));
 }
 
-const RigidBody& RigidBodyIntegratorBase::getShapedBody(int index) const {
+const RigidBodySystem& RigidBodyIntegratorBase::getShapedBody(int index) const {
     getBodyParticles(index);  // checks the index
-    const RigidBody& body = getKernel().getBodies().getBodies()[index];
-    if (!body.shapeKnown)
+    const RigidBodySystem& all = getTopology();
+    if (!all.isShapeKnown(index))
         throw OpenMMException(className + ": body " + to_string(index) + " is an explicit body, which takes its shape from "
                 "the positions; set the Context's positions first");
-    return body;
+    return all;
 }
 
 string RigidBodyIntegratorBase::getBodyKind(int index) const {
-    return RigidBody::kindName(getShapedBody(index).kind);
+    return rigidBodyKindName(getShapedBody(index).getKind(index));
 }
 
 vector<double> RigidBodyIntegratorBase::getBodyMoments(int index) const {
-    const Vector3& moments = getShapedBody(index).moments;
+    const Vector3& moments = getShapedBody(index).getMoments(index);
     return vector<double>(moments.begin(), moments.end());
 }
 
@@ -87,7 +95,7 @@ int RigidBodyIntegratorBase::getNumDegreesOfFreedom() const {
     // The rotational degrees of freedom of an explicit body depend on its shape (linear or not).
     for (int b = 0; b < getNumBodies(); b++)
         getShapedBody(b);
-    return getKernel().getBodies().getNumDegreesOfFreedom();
+    return getTopology().getNumDegreesOfFreedom();
 }
 
 double RigidBodyIntegratorBase::computeSystemTemperature() {
@@ -114,10 +122,13 @@ void RigidBodyIntegratorBase::initialize(ContextImpl& contextRef) {
         throw OpenMMException("This Integrator is already bound to a context");
     context = &contextRef;
     owner = &contextRef.getOwner();
-    kernel = context->getPlatform().createKernel(getKernelNames()[0], contextRef);
-    initializeKernel(contextRef);
+    topology.reset(new RigidBodySystem(contextRef.getSystem(), bodies, explicitBodies, className));
+    kernel = context->getPlatform().createKernel(IntegrateRigidBodyStepKernel::Name(), contextRef);
+    kernel.getAs<IntegrateRigidBodyStepKernel>().initialize(contextRef, *topology);
     if (explicitBodies)
         RigidBodyMoleculesImpl::install(contextRef, bodies, className);
+    stepState = StepState();
+    stepState.seed = chooseRandomSeed(getRequestedSeed());
     bound = true;
     forcesAreValid = false;
     needsProjection = true;
@@ -126,6 +137,20 @@ void RigidBodyIntegratorBase::initialize(ContextImpl& contextRef) {
 void RigidBodyIntegratorBase::cleanup() {
     bound = false;
     kernel = Kernel();
+    topology.reset();
+}
+
+void RigidBodyIntegratorBase::projectBodies() {
+    IntegrateRigidBodyStepKernel& stepKernel = getKernel();
+    const StepGeometry geometry = currentGeometry(*context, *topology);
+    if (!topology->allShapesKnown()) {
+        // An explicit body still without a shape: the error says why.
+        vector<Vec3> positions;
+        context->getPositions(positions);
+        topology->captureShapes(positions, geometry, true);
+    }
+    stepKernel.setGeometry(*context, geometry);
+    stepKernel.project(*context);
 }
 
 void RigidBodyIntegratorBase::stateChanged(State::DataType changed) {
@@ -137,22 +162,25 @@ void RigidBodyIntegratorBase::stateChanged(State::DataType changed) {
         return;
     const bool wasFitted = !needsProjection;
     needsProjection = true;
-    RigidBodyStepKernel& stepKernel = getKernel();
+    IntegrateRigidBodyStepKernel& stepKernel = getKernel();
     // Explicit bodies take their shape from the first positions set, whatever (an energy
     // minimization, say) moves the particles before the first step; a constraint the shape
     // contradicts is an error here.
-    if (changed == State::Positions)
-        stepKernel.captureShapes(*context);
+    if (changed == State::Positions && !topology->allShapesKnown()) {
+        vector<Vec3> positions;
+        context->getPositions(positions);
+        topology->captureShapes(positions, currentGeometry(*context, *topology), false);
+    }
     // Project now, so that the State a user reads before the first step (its kinetic energy, its
     // velocities) is the rigid one the step starts from. What cannot be projected yet (an explicit
     // body without a shape, a non-finite coordinate) stays for the step, which says what is wrong.
-    if (stepKernel.allShapesKnown()) {
+    if (topology->allShapesKnown()) {
         try {
             // New velocities on bodies already fitted to the positions: only the velocities change.
             if (changed == State::Velocities && wasFitted && stepKernel.positionsAreCurrent(*context))
                 stepKernel.projectVelocities(*context);
             else
-                stepKernel.project(*context);
+                projectBodies();
             needsProjection = false;
         }
         catch (const OpenMMException&) {
@@ -174,18 +202,21 @@ const int32_t checkpointVersion = 1;
 
 void RigidBodyIntegratorBase::createCheckpoint(ostream& stream) const {
     // The bodies' state is a function of the positions and velocities the checkpoint already holds.
-    // The header names the format and the class; the kernel adds the state of its random numbers.
-    const RigidBodyStepKernel& stepKernel = getKernel();
+    // The header names the format and the class; the step state follows.
+    getKernel();  // throws unless bound
     stream.write(checkpointMagic, sizeof(checkpointMagic));
     stream.write((const char*) &checkpointVersion, sizeof(checkpointVersion));
     int32_t length = className.size();
     stream.write((const char*) &length, sizeof(length));
     stream.write(className.data(), length);
-    stepKernel.createCheckpoint(*context, stream);
+    stream.write((const char*) &stepState.seed, sizeof(stepState.seed));
+    stream.write((const char*) &stepState.randomCounter, sizeof(stepState.randomCounter));
+    if (hasThermostatWork())
+        stream.write((const char*) &stepState.thermostatWork, sizeof(stepState.thermostatWork));
 }
 
 void RigidBodyIntegratorBase::loadCheckpoint(istream& stream) {
-    RigidBodyStepKernel& stepKernel = getKernel();
+    getKernel();  // throws unless bound
     // A checkpoint from before version 1 has no header: its first bytes are a random number seed.
     int32_t version = 0;
     streampos start = stream.tellg();
@@ -212,7 +243,25 @@ void RigidBodyIntegratorBase::loadCheckpoint(istream& stream) {
         stream.clear();
         stream.seekg(start);
     }
-    stepKernel.loadCheckpoint(*context, stream, version);
+    // Before headers the integrator's data ended the checkpoint: one that ends here was written before
+    // the integrator had random numbers (a RigidBodyIntegrator without a thermostat), and means "none
+    // drawn yet".
+    if (version == 0 && stream.peek() == char_traits<char>::eof())
+        stream.clear();
+    else {
+        StepState saved;
+        stream.read((char*) &saved.seed, sizeof(saved.seed));
+        stream.read((char*) &saved.randomCounter, sizeof(saved.randomCounter));
+        if (!stream)
+            throw OpenMMException(className + ": the checkpoint ends within the state of the integrator's random numbers");
+        if (hasThermostatWork()) {
+            stream.read((char*) &saved.thermostatWork, sizeof(saved.thermostatWork));
+            if (!stream)
+                throw OpenMMException(className + ": the checkpoint ends within the thermostat's state (was it written by a "
+                        "RigidBodyLangevinIntegrator?)");
+        }
+        stepState = saved;
+    }
     needsProjection = true;
     forcesAreValid = false;
 }
@@ -220,7 +269,7 @@ void RigidBodyIntegratorBase::loadCheckpoint(istream& stream) {
 void RigidBodyIntegratorBase::step(int steps) {
     if (!bound)
         throw OpenMMException("This Integrator is not bound to a context!");
-    RigidBodyStepKernel& stepKernel = getKernel();
+    IntegrateRigidBodyStepKernel& stepKernel = getKernel();
     // The rule: what the step takes from before (the bodies' frames and momenta, the forces of the
     // last evaluation) is proven current first, or rebuilt. The bodies are current if the positions
     // are those the kernel last wrote and no notice came since; the forces are current if, besides,
@@ -235,14 +284,14 @@ void RigidBodyIntegratorBase::step(int steps) {
         if (!needsProjection && !stepKernel.positionsAreCurrent(*context))
             needsProjection = true;  // moved without a notice: a CompoundIntegrator's other integrator, the minimizer
         if (needsProjection) {
-            stepKernel.project(*context);
+            projectBodies();
             needsProjection = false;
             forcesAreValid = false;
         }
         if (!forcesAreValid || context->getLastForceGroups() != getIntegrationForceGroups())
             context->calcForcesAndEnergy(true, false, getIntegrationForceGroups());
         try {
-            executeKernel(*context);
+            executeStep(*context);
         }
         catch (...) {
             // The step stopped part way (an unstable simulation): rebuild everything from the Context.

@@ -1,5 +1,5 @@
 #include "RigidBodyLangevinIntegrator.h"
-#include "RigidBodyKernels.h"
+#include "internal/StepSequence.h"
 #include "openmm/OpenMMException.h"
 #include "openmm/internal/ContextImpl.h"
 #include <cmath>
@@ -48,18 +48,8 @@ void RigidBodyLangevinIntegrator::setFriction(double coeff) {
     friction = coeff;
 }
 
-vector<string> RigidBodyLangevinIntegrator::getKernelNames() {
-    vector<string> names;
-    names.push_back(IntegrateRigidBodyLangevinStepKernel::Name());
-    return names;
-}
-
-void RigidBodyLangevinIntegrator::initializeKernel(ContextImpl& context) {
-    kernel.getAs<IntegrateRigidBodyLangevinStepKernel>().initialize(context, *this);
-}
-
-void RigidBodyLangevinIntegrator::executeKernel(ContextImpl& context) {
-    kernel.getAs<IntegrateRigidBodyLangevinStepKernel>().execute(context, *this);
+void RigidBodyLangevinIntegrator::executeStep(ContextImpl& context) {
+    stepRigidBodyLangevinIntegrator(context, getKernel(), *this, getTopology(), stepState);
 }
 
 } // namespace OpenMMRigid

@@ -17,54 +17,185 @@ using namespace std;
 
 namespace OpenMMRigid {
 
-const char* RigidBody::kindName(Kind kind) {
+const char* rigidBodyKindName(RigidBodyKind kind) {
     static const char* names[] = {"point", "linear", "spherical", "symmetric", "asymmetric"};
     return names[kind];
 }
 
-void RigidBody::setShape(const vector<Vector3>& centred) {
+StepGeometry::StepGeometry() : displacementLimit(numeric_limits<double>::infinity()) {
+}
+
+void RigidBodySystem::setShape(int b, const vector<Vector3>& centred) {
+    const int n = getBodySize(b);
+    const int* members = getBodyParticles(b);
+    Vector3* coordinates = &bodyCoordinates[bodyStart[b]];
+    vector<double> bodyMasses(n);
+    for (int i = 0; i < n; i++)
+        bodyMasses[i] = masses[members[i]];
     Matrix3 axes;
-    principalAxes(centred, masses, moments, axes);
-    bodyCoordinates.resize(centred.size());
-    for (size_t i = 0; i < centred.size(); i++)
-        bodyCoordinates[i] = multiplyTransposed(axes, centred[i]);
+    Vector3& moment = moments[b];
+    principalAxes(centred, bodyMasses, moment, axes);
+    for (int i = 0; i < n; i++)
+        coordinates[i] = multiplyTransposed(axes, centred[i]);
     // The smallest moment of a linear molecule computed from coordinates is rounding noise, not zero:
     // snap it, so that the body gets the exact linear-rotor flow with two rotational degrees of freedom.
-    const double largest = moments[2];
-    if (particles.size() == 1 || largest == 0.0) {
-        kind = Point;
-        moments = {0.0, 0.0, 0.0};
-        for (Vector3& b : bodyCoordinates)
-            b = {0.0, 0.0, 0.0};
+    const double largest = moment[2];
+    if (n == 1 || largest == 0.0) {
+        kinds[b] = PointBody;
+        moment = {0.0, 0.0, 0.0};
+        for (int i = 0; i < n; i++)
+            coordinates[i] = {0.0, 0.0, 0.0};
     }
-    else if (moments[0] <= 1e-10*largest) {
-        kind = Linear;
+    else if (moment[0] <= 1e-10*largest) {
+        kinds[b] = LinearBody;
         double perpendicular = 0.0;
-        for (size_t i = 0; i < centred.size(); i++) {
-            bodyCoordinates[i][1] = bodyCoordinates[i][2] = 0.0;
-            perpendicular += masses[i]*bodyCoordinates[i][0]*bodyCoordinates[i][0];
+        for (int i = 0; i < n; i++) {
+            coordinates[i][1] = coordinates[i][2] = 0.0;
+            perpendicular += bodyMasses[i]*coordinates[i][0]*coordinates[i][0];
         }
-        moments = {0.0, perpendicular, perpendicular};
+        moment = {0.0, perpendicular, perpendicular};
     }
     else {
         // The moments the dynamics uses are those of the stored coordinates themselves (the diagonal of
         // their inertia tensor), so that the shape and the rotor agree to rounding.
         for (int k = 0; k < 3; k++) {
-            double moment = 0.0;
-            for (size_t i = 0; i < bodyCoordinates.size(); i++) {
-                const Vector3& b = bodyCoordinates[i];
-                moment += masses[i]*(dot(b, b) - b[k]*b[k]);
-            }
-            moments[k] = moment;
+            double sum = 0.0;
+            for (int i = 0; i < n; i++)
+                sum += bodyMasses[i]*(dot(coordinates[i], coordinates[i]) - coordinates[i][k]*coordinates[i][k]);
+            moment[k] = sum;
         }
         // The reported kind treats moments within 1e-10 relative as equal: coordinates a few nm from the
         // origin carry rounding of about 1e-14 relative into the moments of a truly symmetric shape.
         // The dynamics is unaffected: FreeRotor takes the exact formula for the moments as they are.
         const double tolerance = 1e-10*largest;
-        bool equal01 = moments[1] - moments[0] <= tolerance, equal12 = moments[2] - moments[1] <= tolerance;
-        kind = (equal01 && equal12 ? Spherical : (equal01 || equal12 ? Symmetric : Asymmetric));
+        bool equal01 = moment[1] - moment[0] <= tolerance, equal12 = moment[2] - moment[1] <= tolerance;
+        kinds[b] = (equal01 && equal12 ? SphericalBody : (equal01 || equal12 ? SymmetricBody : AsymmetricBody));
     }
-    shapeKnown = true;
+    shapeKnown[b] = 1;
+}
+
+void RigidBodySystem::settleHandedness(int b, bool mirror) {
+    if (mirror)
+        for (int i = bodyStart[b]; i < bodyStart[b + 1]; i++)
+            bodyCoordinates[i][2] = -bodyCoordinates[i][2];
+    handednessOpen[b] = 0;
+}
+
+bool RigidBodySystem::allShapesKnown() const {
+    for (char known : shapeKnown)
+        if (!known)
+            return false;
+    return true;
+}
+
+void RigidBodySystem::requireFinite(const Vec3& v, const char* quantity, int particle, int body) const {
+    if (!(isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2])))
+        throw OpenMMException(className + ": particle " + to_string(particle) + " of body " + to_string(body) +
+                " has a non-finite " + quantity);
+}
+
+namespace {
+
+/**
+ * sum_i m_i x_i / M: the one formula of a centre of mass, for either way of finding x_i. (Each term
+ * is divided by M, as the fits always did, so that trajectories stay bit for bit.)
+ */
+template <class Value>
+Vector3 massWeightedMean(const vector<double>& masses, const int* members, int n, double totalMass, Value value) {
+    Vector3 mean = {0.0, 0.0, 0.0};
+    for (int i = 0; i < n; i++) {
+        const Vec3& x = value(i);
+        const double m = masses[members[i]];
+        for (int k = 0; k < 3; k++)
+            mean[k] += m*x[k]/totalMass;
+    }
+    return mean;
+}
+
+} // namespace
+
+Vector3 RigidBodySystem::centreOfMass(int b, const Vec3* values) const {
+    return massWeightedMean(masses, getBodyParticles(b), getBodySize(b), bodyMass[b], [&](int i) -> const Vec3& { return values[i]; });
+}
+
+Vector3 RigidBodySystem::centreOfMass(int b, const vector<Vec3>& values) const {
+    const int* members = getBodyParticles(b);
+    return massWeightedMean(masses, members, getBodySize(b), bodyMass[b], [&](int i) -> const Vec3& { return values[members[i]]; });
+}
+
+void RigidBodySystem::assemble(int b, const vector<Vec3>& positions, const StepGeometry& geometry, Vec3* whole) const {
+    // The box is in OpenMM's reduced form: c, then b, then a removes each component in turn.
+    const int n = getBodySize(b);
+    const int* members = getBodyParticles(b);
+    const Vec3& first = positions[members[0]];
+    for (int i = 0; i < n; i++) {
+        Vec3 r = positions[members[i]];
+        if (geometry.periodic && i > 0) {
+            for (int k = 2; k >= 0; k--) {
+                double shift = round((r[k] - first[k])/geometry.box[k][k]);
+                if (shift != 0.0)
+                    r -= geometry.box[k]*shift;
+            }
+        }
+        whole[i] = r;
+    }
+}
+
+void RigidBodySystem::captureShapes(const vector<Vec3>& positions, const StepGeometry& geometry, bool strict) {
+    for (int b = 0; b < getNumBodies(); b++)
+        if (!shapeKnown[b])
+            shapeBody(b, positions, geometry, strict);
+}
+
+bool RigidBodySystem::shapeBody(int b, const vector<Vec3>& positions, const StepGeometry& geometry, bool strict) {
+    const int n = getBodySize(b);
+    const int* members = getBodyParticles(b);
+    vector<Vec3> whole(n);
+    assemble(b, positions, geometry, whole.data());
+    bool finite = true, spread = (n == 1);
+    for (int i = 0; i < n; i++) {
+        finite = finite && isfinite(whole[i][0]) && isfinite(whole[i][1]) && isfinite(whole[i][2]);
+        spread = spread || whole[i] != whole[0];
+    }
+    if (!finite || !spread) {
+        if (!strict)
+            return false;
+        for (int i = 0; i < n; i++)
+            requireFinite(whole[i], "position", members[i], b);
+        throw OpenMMException(className + ": the particles of body " + to_string(b) + " all sit at one point; "
+                "an explicit body takes its shape from the positions, so set them before using the body");
+    }
+    // A constraint inside the body is implied by its rigidity; one the shape contradicts is a mistake
+    // in the System or the positions, not something to drop silently. 1 % allows for positions read
+    // from a file with a few digits.
+    for (const InternalConstraint& constraint : internalConstraints[b]) {
+        const Vec3 separation = whole[constraint.first] - whole[constraint.second];
+        double distance = sqrt(separation.dot(separation));
+        if (fabs(distance - constraint.distance) > 0.01*constraint.distance)
+            throw OpenMMException(className + ": constraint " + to_string(constraint.index) + " holds particles " +
+                    to_string(members[constraint.first]) + " and " + to_string(members[constraint.second]) +
+                    " of body " + to_string(b) + " at " + to_string(constraint.distance) + " nm, but the positions that give "
+                    "the body its shape put them " + to_string(distance) + " nm apart; remove the constraint or set positions "
+                    "that satisfy it");
+    }
+    const Vector3 center = centreOfMass(b, whole.data());
+    vector<Vector3> centred(n);
+    for (int i = 0; i < n; i++)
+        for (int k = 0; k < 3; k++)
+            centred[i][k] = whole[i][k] - center[k];
+    setShape(b, centred);
+    return true;
+}
+
+void RigidBodySystem::addBody(const vector<int>& members) {
+    particles.insert(particles.end(), members.begin(), members.end());
+    bodyStart.push_back(particles.size());
+    bodyCoordinates.resize(particles.size(), Vector3{0.0, 0.0, 0.0});
+    bodyMass.push_back(0.0);
+    moments.push_back({0.0, 0.0, 0.0});
+    kinds.push_back(PointBody);
+    shapeKnown.push_back(0);
+    handednessOpen.push_back(0);
 }
 
 RigidBodySystem::RigidBodySystem(const System& system, const vector<vector<int> >& explicitBodies, bool useExplicit,
@@ -74,13 +205,14 @@ RigidBodySystem::RigidBodySystem(const System& system, const vector<vector<int> 
     for (int i = 0; i < numParticles; i++)
         masses[i] = system.getParticleMass(i);
     bodyOfParticle.assign(numParticles, -1);
+    bodyStart.push_back(0);
+    vector<vector<double> > pairDistances;
     if (useExplicit) {
         for (size_t b = 0; b < explicitBodies.size(); b++) {
-            RigidBody body;
-            body.particles = explicitBodies[b];
-            if (body.particles.empty())
+            const vector<int>& members = explicitBodies[b];
+            if (members.empty())
                 throw OpenMMException(className + ": body " + to_string(b) + " has no particles");
-            for (int p : body.particles) {
+            for (int p : members) {
                 if (p < 0 || p >= numParticles)
                     throw OpenMMException(className + ": body " + to_string(b) + " lists particle " + to_string(p) +
                             ", but the System has particles 0 to " + to_string(numParticles - 1));
@@ -91,16 +223,17 @@ RigidBodySystem::RigidBodySystem(const System& system, const vector<vector<int> 
                             to_string(bodyOfParticle[p]) + " and in body " + to_string(b) + "; a particle may belong to one body only");
                 bodyOfParticle[p] = b;
             }
-            bodies.push_back(body);
+            addBody(members);
         }
+        pairDistances.resize(explicitBodies.size());
     }
     else
-        findConstraintBodies(system);
-    for (size_t b = 0; b < bodies.size(); b++)
+        findConstraintBodies(system, pairDistances);
+    for (int b = 0; b < getNumBodies(); b++)
         checkBody(system, b);
 
     // Constraints inside a body are implied by its rigidity; those among free particles stay.
-    internalConstraints.resize(bodies.size());
+    internalConstraints.resize(getNumBodies());
     vector<pair<int, int> > kept;
     vector<double> keptDistances;
     for (int c = 0; c < system.getNumConstraints(); c++) {
@@ -113,10 +246,9 @@ RigidBodySystem::RigidBodySystem(const System& system, const vector<vector<int> 
             keptDistances.push_back(distance);
         }
         else if (bi == bj) {
-            const vector<int>& members = bodies[bi].particles;
-            int first = find(members.begin(), members.end(), i) - members.begin();
-            int second = find(members.begin(), members.end(), j) - members.begin();
-            internalConstraints[bi].push_back({c, first, second, distance});
+            const int* first = getBodyParticles(bi);
+            const int* last = first + getBodySize(bi);
+            internalConstraints[bi].push_back({c, (int) (find(first, last, i) - first), (int) (find(first, last, j) - first), distance});
         }
         else {
             auto describe = [](int particle, int body) {
@@ -126,6 +258,9 @@ RigidBodySystem::RigidBodySystem(const System& system, const vector<vector<int> 
                     describe(j, bj) + "; a constraint may not connect a rigid body to anything outside it");
         }
     }
+    for (int b = 0; b < getNumBodies(); b++)
+        if (!pairDistances[b].empty())
+            shapeFromDistances(b, pairDistances[b]);
     if (!kept.empty()) {
         freeConstraints.reset(new System());
         for (int i = 0; i < numParticles; i++)
@@ -154,7 +289,7 @@ RigidBodySystem::RigidBodySystem(const System& system, const vector<vector<int> 
     largestCutoff = (cutoff > 0.0 ? cutoff : numeric_limits<double>::infinity());
 }
 
-void RigidBodySystem::findConstraintBodies(const System& system) {
+void RigidBodySystem::findConstraintBodies(const System& system, vector<vector<double> >& pairDistances) {
     // Connected components of the constraint graph (union-find).
     const int numParticles = system.getNumParticles();
     vector<int> parent(numParticles);
@@ -185,12 +320,11 @@ void RigidBodySystem::findConstraintBodies(const System& system) {
         // of freedom; a chain such as X-H bonds in a flexible solute has fewer and stays free.
         if (n < 3 || (int) constraints.size() < 3*n - 6)
             continue;
-        RigidBody body;
-        body.particles = members;
-        int b = bodies.size();
+        int b = getNumBodies();
         for (int p : members)
             bodyOfParticle[p] = b;
-        // When every pair is constrained the distances fix the shape: keep them for checkBody().
+        addBody(members);
+        // When every pair is constrained the distances fix the shape.
         map<pair<int, int>, double> distances;
         for (int c : constraints) {
             int i, j;
@@ -198,75 +332,75 @@ void RigidBodySystem::findConstraintBodies(const System& system) {
             system.getConstraintParameters(c, i, j, distance);
             distances[{min(i, j), max(i, j)}] = distance;
         }
+        pairDistances.emplace_back();
         if ((int) distances.size() == n*(n - 1)/2) {
-            body.pairDistances.resize(n*n, 0.0);
+            vector<double>& pairs = pairDistances.back();
+            pairs.resize(n*n, 0.0);
             for (int i = 0; i < n; i++)
                 for (int j = i + 1; j < n; j++)
-                    body.pairDistances[i*n + j] = body.pairDistances[j*n + i] = distances[{members[i], members[j]}];
+                    pairs[i*n + j] = pairs[j*n + i] = distances[{members[i], members[j]}];
         }
-        bodies.push_back(body);
     }
 }
 
 void RigidBodySystem::checkBody(const System& system, int index) {
-    RigidBody& body = bodies[index];
-    for (int p : body.particles) {
+    const int* members = getBodyParticles(index);
+    for (int i = 0; i < getBodySize(index); i++) {
+        const int p = members[i];
         if (system.isVirtualSite(p))
             throw OpenMMException(className + ": particle " + to_string(p) + " of body " + to_string(index) +
                     " is a virtual site; virtual sites follow their parent particles and cannot be body members");
         if (masses[p] == 0.0)
             throw OpenMMException(className + ": particle " + to_string(p) + " of body " + to_string(index) +
                     " has zero mass; every body member must be massive");
-        body.masses.push_back(masses[p]);
-        body.mass += masses[p];
+        bodyMass[index] += masses[p];
     }
-    if (body.pairDistances.empty())
-        return;
+}
+
+void RigidBodySystem::shapeFromDistances(int b, const vector<double>& pairDistances) {
     // Classical multidimensional scaling: the centred Gram matrix -1/2 J D^2 J of the constraint
     // distances has rank <= 3, and its leading eigenvectors scaled by sqrt(eigenvalue) are coordinates
     // reproducing every distance (Torgerson, Psychometrika 17, 401 (1952)).
-    const int n = body.particles.size();
+    const int n = getBodySize(b);
     vector<double> gram(n*n), rowMean(n, 0.0);
     double mean = 0.0;
     for (int i = 0; i < n; i++)
         for (int j = 0; j < n; j++) {
-            double d2 = body.pairDistances[i*n + j]*body.pairDistances[i*n + j];
+            double d2 = pairDistances[i*n + j]*pairDistances[i*n + j];
             rowMean[i] += d2/n;
             mean += d2/(n*n);
         }
     for (int i = 0; i < n; i++)
         for (int j = 0; j < n; j++) {
-            double d2 = body.pairDistances[i*n + j]*body.pairDistances[i*n + j];
+            double d2 = pairDistances[i*n + j]*pairDistances[i*n + j];
             gram[i*n + j] = -0.5*(d2 - rowMean[i] - rowMean[j] + mean);
         }
     vector<double> values, vectors;
     symmetricEigen(gram, n, values, vectors);
-    vector<Vector3> coordinates(n, Vector3{0.0, 0.0, 0.0});
+    vector<Vec3> coordinates(n);
     for (int k = 0; k < min(3, n); k++) {
         int column = n - 1 - k;
         double scale = sqrt(max(values[column], 0.0));
         for (int i = 0; i < n; i++)
             coordinates[i][k] = vectors[i*n + column]*scale;
     }
-    Vector3 center = {0.0, 0.0, 0.0};
+    const Vector3 center = centreOfMass(b, coordinates.data());
+    vector<Vector3> centred(n);
     for (int i = 0; i < n; i++)
         for (int k = 0; k < 3; k++)
-            center[k] += body.masses[i]*coordinates[i][k]/body.mass;
-    for (Vector3& x : coordinates)
-        for (int k = 0; k < 3; k++)
-            x[k] -= center[k];
-    body.setShape(coordinates);
+            centred[i][k] = coordinates[i][k] - center[k];
+    setShape(b, centred);
     // Distances do not tell a three-dimensional shape from its mirror image; the first fit to
     // positions does. Planar and linear shapes are their own mirror images up to a rotation.
-    double planarity = fabs(body.moments[2] - body.moments[1] - body.moments[0]);
-    body.handednessOpen = (body.kind != RigidBody::Point && body.kind != RigidBody::Linear &&
-                           planarity > 1e-10*body.moments[2]);
+    const Vector3& moment = moments[b];
+    double planarity = fabs(moment[2] - moment[1] - moment[0]);
+    handednessOpen[b] = (kinds[b] != PointBody && kinds[b] != LinearBody && planarity > 1e-10*moment[2]);
 }
 
 int RigidBodySystem::getNumDegreesOfFreedom() const {
     int dof = 3*freeParticles.size() - numFreeConstraints;
-    for (const RigidBody& body : bodies)
-        dof += 3 + (body.kind == RigidBody::Point ? 0 : body.kind == RigidBody::Linear ? 2 : 3);
+    for (RigidBodyKind kind : kinds)
+        dof += 3 + (kind == PointBody ? 0 : kind == LinearBody ? 2 : 3);
     if (removesCenterOfMassMotion)
         dof -= 3;
     return dof;

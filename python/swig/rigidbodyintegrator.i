@@ -551,6 +551,9 @@ degrees of freedom, temperature). It cannot be created on its own.
 %rename(_asRigidBodyLangevinIntegrator) OpenMMRigid::Python::asRigidBodyLangevinIntegrator;
 %newobject OpenMMRigid::Python::deserializeRigidIntegrator;
 %newobject OpenMMRigid::Python::cloneRigidIntegrator;
+// The options are the integrators' class constants (RigidBodyIntegrator.Exact, ...), not a class of their own.
+%ignore OpenMMRigid::RigidBodyOptions;
+%include "RigidBodyOptions.h"
 %include "RigidBodyIntegratorBase.h"
 %include "RigidBodyIntegrator.h"
 

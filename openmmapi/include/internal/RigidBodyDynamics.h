@@ -1,43 +1,68 @@
 #ifndef OPENMMRIGID_RIGIDBODYDYNAMICS_H_
 #define OPENMMRIGID_RIGIDBODYDYNAMICS_H_
 
-#include "RigidBodyIntegratorBase.h"
+#include "RigidBodyOptions.h"
 #include "internal/RigidBodySystem.h"
 #include "internal/windowsExportRigid.h"
 #include "numerics/Matrix3.h"
 #include "openmm/Vec3.h"
 #include <cstdint>
 #include <functional>
-#include <memory>
 #include <string>
 #include <vector>
-
-namespace OpenMM {
-class ReferenceConstraintAlgorithm;
-class ThreadPool;
-}
 
 namespace OpenMMRigid {
 
 /**
- * The physics of a step of RigidBodyIntegrator or RigidBodyLangevinIntegrator on plain arrays of
- * positions, velocities and forces (every platform's kernel extracts its arrays and calls this
- * class). A step is a sequence of stages (internal/Splitting.h; for the Langevin integrator
- * kickAndDrift, thermalize, drift, closingKick) with a force evaluation, which the caller performs,
- * after each drift:
+ * Threads for the per-body loops of the host stages, supplied by the platform (the CPU platform's
+ * thread pool); without one the loops run serially.
+ */
+class OPENMM_EXPORT_RIGID HostThreads {
+public:
+    virtual ~HostThreads() {
+    }
+    virtual int getNumThreads() const = 0;
+    /** Run task(thread) once on each thread, thread = 0 ... getNumThreads() - 1, and wait for all. */
+    virtual void execute(const std::function<void(int thread)>& task) = 0;
+};
+
+/**
+ * The constraints among free particles, solved on host arrays: supplied by the platform (the
+ * Reference platform's solver), since the step sequence only says when to apply them.
+ */
+class OPENMM_EXPORT_RIGID HostConstraints {
+public:
+    virtual ~HostConstraints() {
+    }
+    /**
+     * Move the positions `updated` so that the constraints hold, along the constraint directions of
+     * `before` (SHAKE-like), to the relative tolerance.
+     */
+    virtual void apply(std::vector<OpenMM::Vec3>& before, std::vector<OpenMM::Vec3>& updated,
+                       std::vector<double>& inverseMasses, double tolerance) = 0;
+    /** Remove the velocity components along the constraints at these positions. */
+    virtual void applyToVelocities(std::vector<OpenMM::Vec3>& positions, std::vector<OpenMM::Vec3>& velocities,
+                                   std::vector<double>& inverseMasses, double tolerance) = 0;
+};
+
+/**
+ * The stages of a rigid-body step (internal/StepSequence.h says in which order they run) carried out
+ * on host arrays of positions, velocities and forces: what the Reference and CPU kernels do. The
+ * body topology is read, never changed, except that the first fit settles the handedness of shapes
+ * built from distances.
  *
  *   kickAndDrift(a, b):  for each body, a kick V += F a / M, L += tau a (lab frame) followed by the
  *                        free drift R += V b and the rotation of the attitude for a time b (exact
  *                        free rotor or NO_SQUISH), and the particles placed at R + A^T b_i; free
  *                        particles: kick and drift, with their constraints applied to positions.
+ *                        A kick of 0 reads no forces (the second half drift of a Langevin step).
  *   closingKick(a):      the last kick of the step, after which the rigid velocities
  *                        v = V + omega x (r - R) are written to the body particles; free particles:
  *                        kick and velocity constraints.
- *   drift(b):            the free drift alone (the second half drift of a Langevin step).
  *   thermalize(c, kT):   the exact Ornstein-Uhlenbeck step of the momenta (see below).
- *   scaleVelocities(a):  every momentum times a (a thermostat's rescaling, after the closing kick).
+ *   scaleMomenta(a):     every momentum times a (a thermostat's rescaling, after the closing kick).
  *
- * Each is one pass over the bodies (on the thread pool, if there is one). Between them the body
+ * Each is one pass over the bodies (on the threads, if there are any). Between them the body
  * momenta live in this class; the particle velocities of the bodies are written once per step.
  * (The free particles' velocities are constrained only after the closing kick: a velocity projection
  * before a drift would change nothing, since the drift's position constraints absorb any velocity
@@ -48,38 +73,19 @@ namespace OpenMMRigid {
  */
 class OPENMM_EXPORT_RIGID RigidBodyDynamics {
 public:
-    explicit RigidBodyDynamics(RigidBodySystem& system);
-    ~RigidBodyDynamics();
     /**
-     * Run the per-body work on these threads (the CPU platform's); null runs it serially.
+     * @param system       the body topology (kept by reference)
+     * @param threads      the threads of the per-body loops, or null to run them serially (kept by reference)
+     * @param constraints  the solver of the constraints among free particles; required if the topology
+     *                     has any (getFreeConstraintSystem()), else may be null (kept by reference)
      */
-    void setThreadPool(OpenMM::ThreadPool* pool);
-    /**
-     * Set the periodic box the positions live in (the three reduced box vectors, in nm), or null if
-     * the System is not periodic. Every fit assembles each body from the periodic images of its
-     * particles nearest its first particle, so a molecule split by the boundary is taken whole.
-     */
-    void setPeriodicBox(const OpenMM::Vec3* vectors);
-    /**
-     * Set the largest distance, in nm, a body or free particle may move in one drift: further is an
-     * unstable simulation, and the drift stops with an OpenMMException saying so.
-     *
-     * @param limit        the distance (infinity for none)
-     * @param description  what the distance is, for the message (a string literal, e.g. "the nonbonded cutoff")
-     */
-    void setDisplacementLimit(double limit, const char* description);
-    /**
-     * Give every explicit body that has no shape yet the shape it has in these positions, where
-     * they place its particles apart and at finite coordinates (the others wait for later positions).
-     * A constraint inside a body that the shape contradicts by more than 1 % is an OpenMMException.
-     */
-    void captureShapes(const std::vector<OpenMM::Vec3>& positions);
-    /** Whether every body has its shape (explicit bodies get theirs from the first positions set). */
-    bool allShapesKnown() const;
+    RigidBodyDynamics(RigidBodySystem& system, HostThreads* threads, HostConstraints* constraints);
+    /** Set the periodic box and the largest plausible drift (see StepGeometry), before a step or a fit. */
+    void setGeometry(const StepGeometry& geometry);
     /**
      * Fit every body to the positions (mass-weighted least squares, Horn's method), then replace the
      * body particles' positions by the rigid ones and their velocities by the rigid motion with the
-     * same linear and angular momentum. Explicit bodies without a shape take it from these positions.
+     * same linear and angular momentum. Every body must have its shape.
      */
     void project(std::vector<OpenMM::Vec3>& positions, std::vector<OpenMM::Vec3>& velocities);
     /**
@@ -94,23 +100,14 @@ public:
      * CMMotionRemover, which does so without telling the integrator): then they are taken from
      * the particles.
      *
-     * @param kick                 the time by which the forces change the momenta, in ps
+     * @param kick                 the time by which the forces change the momenta, in ps (0: forces not read)
      * @param drift                the time of the free motion, in ps (may be negative)
      * @param method               how the bodies rotate during the drift
      * @param constraintTolerance  the tolerance of the constraints among free particles
      */
     void kickAndDrift(std::vector<OpenMM::Vec3>& positions, std::vector<OpenMM::Vec3>& velocities,
                       const std::vector<OpenMM::Vec3>& forces, double kick, double drift,
-                      RigidBodyIntegratorBase::RotationMethod method, double constraintTolerance);
-    /**
-     * A free drift without a kick: kickAndDrift() with no forces.
-     *
-     * @param drift                the time of the free motion, in ps (may be negative)
-     * @param method               how the bodies rotate during the drift
-     * @param constraintTolerance  the tolerance of the constraints among free particles
-     */
-    void drift(std::vector<OpenMM::Vec3>& positions, std::vector<OpenMM::Vec3>& velocities, double drift,
-               RigidBodyIntegratorBase::RotationMethod method, double constraintTolerance);
+                      RigidBodyOptions::RotationMethod method, double constraintTolerance);
     /**
      * The Ornstein-Uhlenbeck stage of a Langevin step: the exact solution, over the time whose
      * damping factor is c, of dp = -gamma p dt + sqrt(2 gamma m kT) dW for every momentum p with
@@ -122,9 +119,9 @@ public:
      * where L_k is the angular momentum in the body's principal frame, whose canonical distribution
      * is Gaussian with variance I_k kT; the axis of a linear body (I_0 = 0) carries none, and a
      * single-particle body has no rotation. The xi_k are the body-frame components of a lab-frame
-     * standard normal vector, so that the noise does not depend on the choice of principal axes. Free particles: v <- c v + sqrt((1 - c^2) kT / m) xi,
-     * then the velocity constraints among them. Body particle velocities are written by the closing
-     * kick, as always.
+     * standard normal vector, so that the noise does not depend on the choice of principal axes.
+     * Free particles: v <- c v + sqrt((1 - c^2) kT / m) xi, then the velocity constraints among
+     * them. Body particle velocities are written by the closing kick, as always.
      *
      * Body b draws its six deviates (three for V, three for L) from NormalStream(seed, b, step);
      * free particle i (in the order of RigidBodySystem::getFreeParticles()) its three from
@@ -144,7 +141,7 @@ public:
      * kick: the stochastic velocity rescaling of RigidBodyIntegrator's thermostat. The velocity
      * constraints among free particles stay satisfied.
      */
-    void scaleVelocities(std::vector<OpenMM::Vec3>& velocities, double alpha);
+    void scaleMomenta(std::vector<OpenMM::Vec3>& velocities, double alpha);
     /**
      * The last kick of a step: kick every body and free particle by the forces, write the bodies'
      * rigid velocities to their particles and apply the velocity constraints of the free particles.
@@ -159,55 +156,42 @@ public:
      * particles, and the rest of the bodies' kinetic energy (their rotation, for rigid velocities).
      */
     void computeKineticEnergies(const std::vector<OpenMM::Vec3>& velocities, double& translational, double& rotational) const;
+    /** The kinetic energy sum m v^2 / 2 over every particle. */
+    double computeKineticEnergy(const std::vector<OpenMM::Vec3>& velocities) const;
 private:
     struct BodyState {
         Vector3 center, velocity, angularMomentum;  // angular momentum in the lab frame
         Matrix3 attitude;                           // lab to body
     };
+    /** Run task(b) for every body, on the threads if there are any; the first exception is rethrown here. */
     void forEachBody(const std::function<void(int)>& task);
     /** Take body b's momenta from its particles if their velocities are not the ones this class wrote. */
     void refreshMomenta(int b, const std::vector<OpenMM::Vec3>& positions, const std::vector<OpenMM::Vec3>& velocities);
-    /** The total force and the torque about the centre on a body. */
-    void forceAndTorque(const RigidBody& body, const BodyState& state, const std::vector<OpenMM::Vec3>& positions,
-                        const std::vector<OpenMM::Vec3>& forces, OpenMM::Vec3& force, OpenMM::Vec3& torque) const;
-    /** kickAndDrift() with forces, drift() without (forces null). */
-    void advance(std::vector<OpenMM::Vec3>& positions, std::vector<OpenMM::Vec3>& velocities,
-                 const std::vector<OpenMM::Vec3>* forces, double kick, double drift,
-                 RigidBodyIntegratorBase::RotationMethod method, double constraintTolerance);
+    /** The total force and the torque about the centre on body b. */
+    void forceAndTorque(int b, const std::vector<OpenMM::Vec3>& positions, const std::vector<OpenMM::Vec3>& forces,
+                        OpenMM::Vec3& force, OpenMM::Vec3& torque) const;
     /** The free motion of body b for a time h, and its particles placed accordingly. */
-    void driftBody(int b, double h, RigidBodyIntegratorBase::RotationMethod method, std::vector<OpenMM::Vec3>& positions);
-    /**
-     * Give every body without a shape the one it has in these positions; those the positions cannot
-     * shape raise the error if strict, else wait.
-     */
-    void shapeBodies(const std::vector<OpenMM::Vec3>& positions, bool strict);
-    /**
-     * Give body b the shape it has in the positions. If they cannot give one (non-finite, or every
-     * particle at one point), throw if strict, else return false.
-     */
-    bool shapeBody(int b, const std::vector<OpenMM::Vec3>& positions, bool strict);
-    /** The centre of mass of a body's assembled positions, and the positions about it. */
-    void centre(const RigidBody& body, const std::vector<OpenMM::Vec3>& whole, Vector3& center, std::vector<Vector3>& centred) const;
-    /** The positions of a body's particles, each at the periodic image nearest the first particle. */
-    void assemble(const RigidBody& body, const std::vector<OpenMM::Vec3>& positions, std::vector<OpenMM::Vec3>& whole) const;
+    void driftBody(int b, double h, RigidBodyOptions::RotationMethod method, std::vector<OpenMM::Vec3>& positions);
     /** Throw the "unstable" error if a drift would move a body or free particle further than the limit. */
     void checkDisplacement(const char* what, int index, double distance, double drift) const;
-    void rotate(const RigidBody& body, BodyState& state, double dt, RigidBodyIntegratorBase::RotationMethod method) const;
-    void fitBody(int index, std::vector<OpenMM::Vec3>& positions, std::vector<OpenMM::Vec3>& velocities);
-    /** Replace body index's particle velocities by the rigid motion with their linear and angular momentum. */
-    void projectBodyVelocities(int index, std::vector<OpenMM::Vec3>& velocities);
+    void rotate(int b, double dt, RigidBodyOptions::RotationMethod method);
+    void fitBody(int b, std::vector<OpenMM::Vec3>& positions, std::vector<OpenMM::Vec3>& velocities);
+    /** Replace body b's particle velocities by the rigid motion with their linear and angular momentum. */
+    void projectBodyVelocities(int b, std::vector<OpenMM::Vec3>& velocities);
+    /** The body-frame angular velocity I^-1 L of body b; a zero moment (the axis of a linear body) carries none. */
+    Vector3 bodyAngularVelocity(int b, const Vector3& bodyAngularMomentum) const;
     RigidBodySystem& system;
-    bool periodic;
-    OpenMM::Vec3 box[3];
-    double displacementLimit;
-    const char* displacementLimitName;
+    HostThreads* threads;
+    HostConstraints* constraints;
+    StepGeometry geometry;
     std::vector<BodyState> states;
     std::vector<double> inverseMasses;
     std::vector<OpenMM::Vec3> previousPositions;
     /** The body particles' velocities as this class last wrote or read them, consistent with the states. */
     std::vector<OpenMM::Vec3> writtenVelocities;
-    std::unique_ptr<OpenMM::ReferenceConstraintAlgorithm> constraints;
-    OpenMM::ThreadPool* threads;
+    /** Scratch for the fits: one body's assembled positions and their offsets from its centre. */
+    std::vector<OpenMM::Vec3> whole;
+    std::vector<Vector3> centred, arms;
 };
 
 } // namespace OpenMMRigid

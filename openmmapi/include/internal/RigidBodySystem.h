@@ -11,33 +11,53 @@
 
 namespace OpenMMRigid {
 
+/** The kind of a rigid body, by its principal moments: what its rotation is, and how many degrees of freedom it has. */
+enum RigidBodyKind {
+    /** One particle, or all at one point: translation only. */
+    PointBody = 0,
+    /** A line of particles: two rotational degrees of freedom (the smallest moment is zero). */
+    LinearBody = 1,
+    /** Three equal moments. */
+    SphericalBody = 2,
+    /** Two equal moments. */
+    SymmetricBody = 3,
+    /** Three different moments. */
+    AsymmetricBody = 4
+};
+
+/** "point", "linear", "spherical", "symmetric" or "asymmetric". */
+OPENMM_EXPORT_RIGID const char* rigidBodyKindName(RigidBodyKind kind);
+
 /**
- * The description of one rigid body: its particles and masses, and (once known) its shape in the
- * principal-axis frame with the centre of mass at the origin.
+ * The periodic box and the largest plausible drift at one moment: what a fit needs to assemble a body
+ * split by the boundary, and what a drift needs to tell a blow-up from a step.
  */
-struct OPENMM_EXPORT_RIGID RigidBody {
-    enum Kind { Point = 0, Linear = 1, Spherical = 2, Symmetric = 3, Asymmetric = 4 };
-    std::vector<int> particles;
-    std::vector<double> masses;
-    double mass = 0.0;
-    /** Constraint distances of every pair when the constraints define the shape; empty otherwise. */
-    std::vector<double> pairDistances;
-    bool shapeKnown = false;
-    /** The shape was built from distances alone, so its handedness is settled at the first fit. */
-    bool handednessOpen = false;
-    std::vector<Vector3> bodyCoordinates;
-    Vector3 moments = {0.0, 0.0, 0.0};  // ascending
-    Kind kind = Point;
-    /** Set the shape from coordinates about the centre of mass (any orientation): principal axes, moments, kind. */
-    void setShape(const std::vector<Vector3>& centred);
-    static const char* kindName(Kind kind);
+struct StepGeometry {
+    /** Whether the System is periodic; box holds OpenMM's reduced box vectors (nm) if it is. */
+    bool periodic = false;
+    OpenMM::Vec3 box[3];
+    /** The largest distance a body or free particle may move in one drift, in nm (infinity for none). */
+    double displacementLimit;
+    /** What displacementLimit is, for the message (a string literal). */
+    const char* displacementLimitName = "no limit";
+    StepGeometry();
 };
 
 /**
- * The partition of a System's particles into rigid bodies, free (flexible) particles and massless
- * virtual sites, with the constraints that remain among free particles. Built once per Context;
- * every inconsistency (a particle in two bodies, a massless or virtual-site body member, a constraint
- * between a body and anything else) is an OpenMMException that names the body and particle.
+ * The body topology of a Context: the partition of its System's particles into rigid bodies, free
+ * (flexible) particles and massless virtual sites, with the constraints that remain among free
+ * particles, and each body's shape. Built once per Context, as flat arrays that any platform can
+ * copy as they are: body b's particles are getParticles()[getBodyStart(b)] to
+ * getParticles()[getBodyStart(b + 1) - 1], and getBodyCoordinates() is parallel to getParticles().
+ *
+ * A body held rigid by constraints has its shape from the start. An explicit body takes its shape
+ * once, from the first positions that give it one (captureShapes()); the handedness of a shape built
+ * from distances alone is settled once, by the first fit (settleHandedness()). After that nothing
+ * changes: every platform reads the same shapes.
+ *
+ * Every inconsistency (a particle in two bodies, a massless or virtual-site body member, a
+ * constraint between a body and anything else) is an OpenMMException that names the integrator's
+ * class, the body and the particle.
  */
 class OPENMM_EXPORT_RIGID RigidBodySystem {
 public:
@@ -57,12 +77,73 @@ public:
         int index, first, second;
         double distance;
     };
-    std::vector<RigidBody>& getBodies() {
-        return bodies;
+    int getNumBodies() const {
+        return bodyMass.size();
     }
-    const std::vector<RigidBody>& getBodies() const {
-        return bodies;
+    /** Where body b's particles start in getParticles(); getBodyStart(getNumBodies()) is the total. */
+    int getBodyStart(int b) const {
+        return bodyStart[b];
     }
+    int getBodySize(int b) const {
+        return bodyStart[b + 1] - bodyStart[b];
+    }
+    /** The particles of every body, body after body. */
+    const std::vector<int>& getParticles() const {
+        return particles;
+    }
+    /** The particles of body b (getBodySize(b) of them). */
+    const int* getBodyParticles(int b) const {
+        return &particles[bodyStart[b]];
+    }
+    /** The position of each body particle in its body's principal-axis frame, centre of mass at the origin (parallel to getParticles()). */
+    const std::vector<Vector3>& getBodyCoordinates() const {
+        return bodyCoordinates;
+    }
+    /** The body-frame coordinates of body b's particles. */
+    const Vector3* getBodyCoordinates(int b) const {
+        return &bodyCoordinates[bodyStart[b]];
+    }
+    double getBodyMass(int b) const {
+        return bodyMass[b];
+    }
+    /** The principal moments of inertia of body b, ascending, in amu nm^2 (zero for a point, the first zero for a line). */
+    const Vector3& getMoments(int b) const {
+        return moments[b];
+    }
+    RigidBodyKind getKind(int b) const {
+        return kinds[b];
+    }
+    /** Whether body b has its shape (coordinates, moments, kind). */
+    bool isShapeKnown(int b) const {
+        return shapeKnown[b] != 0;
+    }
+    /** Whether every body has its shape. */
+    bool allShapesKnown() const;
+    /** Whether body b's shape came from distances alone, so that the first fit chooses between it and its mirror image. */
+    bool isHandednessOpen(int b) const {
+        return handednessOpen[b] != 0;
+    }
+    /** Keep body b's shape (mirror false) or replace it by its mirror image (z -> -z); either way it is settled. */
+    void settleHandedness(int b, bool mirror);
+    /**
+     * Give every body that has no shape yet the one it has in these positions. Those the positions
+     * cannot shape (non-finite, or every particle at one point) wait for later positions, or, if
+     * strict, are an OpenMMException saying what is wrong. A constraint inside a body that the shape
+     * contradicts by more than 1 % is an OpenMMException.
+     */
+    void captureShapes(const std::vector<OpenMM::Vec3>& positions, const StepGeometry& geometry, bool strict);
+    /**
+     * The positions of body b's particles, each at the periodic image nearest the body's first
+     * particle (a body is far smaller than half the box), so that a molecule split by the boundary is
+     * whole. A particle already nearest keeps its coordinates bit for bit.
+     *
+     * @param whole  on exit, getBodySize(b) positions in the body's order
+     */
+    void assemble(int b, const std::vector<OpenMM::Vec3>& positions, const StepGeometry& geometry, OpenMM::Vec3* whole) const;
+    /** The centre of mass sum_i m_i x_i / M of body b, with x_i = values[i] in the body's order. */
+    Vector3 centreOfMass(int b, const OpenMM::Vec3* values) const;
+    /** The centre of mass of body b with x_i = values[particle i] (e.g. the velocity of the centre of mass). */
+    Vector3 centreOfMass(int b, const std::vector<OpenMM::Vec3>& values) const;
     /** The massive particles in no body. */
     const std::vector<int>& getFreeParticles() const {
         return freeParticles;
@@ -75,6 +156,7 @@ public:
     const OpenMM::System* getFreeConstraintSystem() const {
         return freeConstraints.get();
     }
+    /** The mass of every particle of the System (the one copy the plugin keeps). */
     const std::vector<double>& getMasses() const {
         return masses;
     }
@@ -93,13 +175,31 @@ public:
     const std::string& getClassName() const {
         return className;
     }
-    /** Degrees of freedom as the integrator moves the system (see RigidBodyIntegrator::getNumDegreesOfFreedom()). */
+    /**
+     * Degrees of freedom as the integrator moves the system (see RigidBodyIntegratorBase::getNumDegreesOfFreedom()).
+     * Every body must have its shape (allShapesKnown()).
+     */
     int getNumDegreesOfFreedom() const;
+    /** Throw an OpenMMException naming the integrator, the particle and its body unless all three components of v are finite. */
+    void requireFinite(const OpenMM::Vec3& v, const char* quantity, int particle, int body) const;
 private:
-    void findConstraintBodies(const OpenMM::System& system);
+    /** Add a body with these particles (checked against the System by checkBody()). */
+    void addBody(const std::vector<int>& members);
+    void findConstraintBodies(const OpenMM::System& system, std::vector<std::vector<double> >& pairDistances);
     void checkBody(const OpenMM::System& system, int index);
+    /** Give body b the shape of the distances between each pair of its particles (n x n, row-major). */
+    void shapeFromDistances(int b, const std::vector<double>& pairDistances);
+    /** Give body b the shape it has in the positions; false (or, if strict, an exception) if they cannot give one. */
+    bool shapeBody(int b, const std::vector<OpenMM::Vec3>& positions, const StepGeometry& geometry, bool strict);
+    /** Set body b's shape from coordinates about its centre of mass (any orientation): principal axes, moments, kind. */
+    void setShape(int b, const std::vector<Vector3>& centred);
     std::string className;
-    std::vector<RigidBody> bodies;
+    std::vector<int> bodyStart, particles;
+    std::vector<Vector3> bodyCoordinates;
+    std::vector<double> bodyMass;
+    std::vector<Vector3> moments;
+    std::vector<RigidBodyKind> kinds;
+    std::vector<char> shapeKnown, handednessOpen;
     std::vector<std::vector<InternalConstraint> > internalConstraints;
     std::vector<int> freeParticles, bodyOfParticle;
     std::vector<double> masses;

@@ -8,14 +8,12 @@ using namespace OpenMM;
 
 namespace OpenMMRigid {
 
-/** Creates the kernels of RigidBodyIntegrator and RigidBodyLangevinIntegrator for the Reference and CPU platforms. */
+/** Creates the kernel of RigidBodyIntegrator and RigidBodyLangevinIntegrator for the Reference and CPU platforms. */
 class ReferenceRigidKernelFactory : public KernelFactory {
 public:
     KernelImpl* createKernelImpl(std::string name, const Platform& platform, ContextImpl& context) const {
         if (name == IntegrateRigidBodyStepKernel::Name())
             return new ReferenceIntegrateRigidBodyStepKernel(name, platform);
-        if (name == IntegrateRigidBodyLangevinStepKernel::Name())
-            return new ReferenceIntegrateRigidBodyLangevinStepKernel(name, platform);
         throw OpenMMException((std::string("Tried to create kernel with illegal kernel name '") + name + "'").c_str());
     }
 };
@@ -35,7 +33,6 @@ extern "C" OPENMM_EXPORT void registerKernelFactories() {
         if (platform.getName() == "Reference" || platform.getName() == "CPU") {
             OpenMMRigid::ReferenceRigidKernelFactory* factory = new OpenMMRigid::ReferenceRigidKernelFactory();
             platform.registerKernelFactory(OpenMMRigid::IntegrateRigidBodyStepKernel::Name(), factory);
-            platform.registerKernelFactory(OpenMMRigid::IntegrateRigidBodyLangevinStepKernel::Name(), factory);
         }
     }
 }

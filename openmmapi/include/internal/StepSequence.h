@@ -1,0 +1,60 @@
+#ifndef OPENMMRIGID_STEPSEQUENCE_H_
+#define OPENMMRIGID_STEPSEQUENCE_H_
+
+#include "internal/windowsExportRigid.h"
+#include <cstdint>
+
+namespace OpenMM {
+class ContextImpl;
+}
+
+namespace OpenMMRigid {
+
+class IntegrateRigidBodyStepKernel;
+class RigidBodyIntegrator;
+class RigidBodyLangevinIntegrator;
+class RigidBodySystem;
+struct StepGeometry;
+
+/**
+ * What the step sequence keeps from step to step, besides the Context: the key of the random numbers
+ * and how many stages have drawn from it, and the energy the thermostat has put in. Checkpoints save
+ * it (RigidBodyIntegratorBase::createCheckpoint()).
+ */
+struct StepState {
+    uint64_t seed = 0, randomCounter = 0;
+    double thermostatWork = 0.0;
+};
+
+/**
+ * The seed of a new Context's random numbers: the integrator's, or if that is 0 (as in OpenMM's
+ * integrators) one that differs from Context to Context.
+ */
+OPENMM_EXPORT_RIGID uint64_t chooseRandomSeed(int requested);
+
+/**
+ * The periodic box now, and the largest plausible drift: the largest nonbonded cutoff, or half the
+ * narrowest box width if that is less (the box can change between steps, under a barostat).
+ */
+OPENMM_EXPORT_RIGID StepGeometry currentGeometry(OpenMM::ContextImpl& context, const RigidBodySystem& bodies);
+
+/**
+ * One step of RigidBodyIntegrator, on any platform: the kicks and drifts of its splitting
+ * (internal/Splitting.h) with the virtual sites placed and the forces evaluated after each drift,
+ * then, if it has one, the thermostat's rescaling of every momentum. On entry the Context holds the
+ * forces at the current positions and the kernel's bodies agree with them; on exit it holds the
+ * forces at the new positions.
+ */
+OPENMM_EXPORT_RIGID void stepRigidBodyIntegrator(OpenMM::ContextImpl& context, IntegrateRigidBodyStepKernel& kernel,
+        const RigidBodyIntegrator& integrator, const RigidBodySystem& bodies, StepState& state);
+
+/**
+ * One step of RigidBodyLangevinIntegrator, on any platform: half kick, half drift, Ornstein-Uhlenbeck
+ * step, half drift, force evaluation, half kick. Entry and exit as for stepRigidBodyIntegrator().
+ */
+OPENMM_EXPORT_RIGID void stepRigidBodyLangevinIntegrator(OpenMM::ContextImpl& context, IntegrateRigidBodyStepKernel& kernel,
+        const RigidBodyLangevinIntegrator& integrator, const RigidBodySystem& bodies, StepState& state);
+
+} // namespace OpenMMRigid
+
+#endif /*OPENMMRIGID_STEPSEQUENCE_H_*/

@@ -1,0 +1,100 @@
+#include "internal/StepSequence.h"
+#include "RigidBodyIntegrator.h"
+#include "RigidBodyKernels.h"
+#include "RigidBodyLangevinIntegrator.h"
+#include "internal/Splitting.h"
+#include "numerics/Philox.h"
+#include "numerics/StochasticRescaling.h"
+#include "openmm/Context.h"
+#include "openmm/reference/SimTKOpenMMRealType.h"
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+using namespace OpenMM;
+using namespace std;
+
+namespace OpenMMRigid {
+
+namespace {
+
+/** The force evaluation after a drift: the virtual sites follow their parents, then the integration force groups. */
+void evaluateForces(ContextImpl& context, int groups) {
+    context.computeVirtualSites();
+    context.calcForcesAndEnergy(true, false, groups);
+}
+
+} // namespace
+
+uint64_t chooseRandomSeed(int requested) {
+    if (requested != 0)
+        return (uint64_t) (uint32_t) requested;
+    random_device device;
+    return ((uint64_t) device() << 32) | device();
+}
+
+StepGeometry currentGeometry(ContextImpl& context, const RigidBodySystem& bodies) {
+    StepGeometry geometry;
+    geometry.displacementLimit = bodies.getLargestCutoff();
+    geometry.displacementLimitName = "the nonbonded cutoff";
+    geometry.periodic = context.getSystem().usesPeriodicBoundaryConditions();
+    if (geometry.periodic) {
+        context.getPeriodicBoxVectors(geometry.box[0], geometry.box[1], geometry.box[2]);
+        // The reduced box's widths perpendicular to its faces are a_x, b_y and c_z.
+        double halfWidth = 0.5*min(geometry.box[0][0], min(geometry.box[1][1], geometry.box[2][2]));
+        if (halfWidth < geometry.displacementLimit) {
+            geometry.displacementLimit = halfWidth;
+            geometry.displacementLimitName = "half the periodic box width";
+        }
+    }
+    return geometry;
+}
+
+void stepRigidBodyIntegrator(ContextImpl& context, IntegrateRigidBodyStepKernel& kernel, const RigidBodyIntegrator& integrator,
+                             const RigidBodySystem& bodies, StepState& state) {
+    const SplittingScheme& scheme = splittingScheme(integrator.getSplitting());
+    const double dt = integrator.getStepSize(), tolerance = integrator.getConstraintTolerance();
+    const RigidBodyOptions::RotationMethod method = integrator.getRotationMethod();
+    kernel.setGeometry(context, currentGeometry(context, bodies));
+    // kick(a_0 dt) drift(b_0 dt) ... drift(b_{s-1} dt) kick(a_s dt): the first kick uses the forces
+    // the Context holds, and every drift is followed by a force evaluation.
+    for (int stage = 0; stage < scheme.numDrifts; stage++) {
+        kernel.kickAndDrift(context, scheme.kicks[stage]*dt, scheme.drifts[stage]*dt, method, tolerance);
+        evaluateForces(context, integrator.getIntegrationForceGroups());
+    }
+    kernel.closingKick(context, scheme.kicks[scheme.numDrifts]*dt, tolerance);
+    if (integrator.hasThermostat()) {
+        // Bussi, Donadio and Parrinello, J. Chem. Phys. 126, 014101 (2007), eq. (A7): one global
+        // factor for every momentum, from the exact solution over this step of the stochastic
+        // equation for the kinetic energy.
+        double translational, rotational, newKinetic;
+        kernel.computeKineticEnergies(context, translational, rotational);
+        const int dof = bodies.getNumDegreesOfFreedom();
+        NormalStream random(state.seed, 0, state.randomCounter++);
+        double alpha = stochasticRescalingFactor(translational + rotational, 0.5*dof*BOLTZ*integrator.getThermostatTemperature(),
+                                                 dof, exp(-dt/integrator.getThermostatCollisionTime()), random, newKinetic);
+        kernel.scaleMomenta(context, alpha);
+        state.thermostatWork += newKinetic - (translational + rotational);
+    }
+    kernel.finishStep(context, dt);
+}
+
+void stepRigidBodyLangevinIntegrator(ContextImpl& context, IntegrateRigidBodyStepKernel& kernel,
+                                     const RigidBodyLangevinIntegrator& integrator, const RigidBodySystem& bodies, StepState& state) {
+    const double dt = integrator.getStepSize(), tolerance = integrator.getConstraintTolerance();
+    const double friction = integrator.getFriction();
+    const RigidBodyOptions::RotationMethod method = integrator.getRotationMethod();
+    kernel.setGeometry(context, currentGeometry(context, bodies));
+    // BAOAB (Leimkuhler and Matthews, Appl. Math. Res. Express 2013, 34), as LangevinMiddleIntegrator:
+    // B, A, O, A, force, B. With no friction the O stage is the identity and is left out, so that the
+    // step is exactly the constant-energy kick, half drift, half drift, kick.
+    kernel.kickAndDrift(context, 0.5*dt, 0.5*dt, method, tolerance);
+    if (friction > 0.0)
+        kernel.thermalize(context, exp(-friction*dt), BOLTZ*integrator.getTemperature(), state.seed, state.randomCounter++, tolerance);
+    kernel.kickAndDrift(context, 0.0, 0.5*dt, method, tolerance);
+    evaluateForces(context, integrator.getIntegrationForceGroups());
+    kernel.closingKick(context, 0.5*dt, tolerance);
+    kernel.finishStep(context, dt);
+}
+
+} // namespace OpenMMRigid
