@@ -10,7 +10,7 @@ namespace OpenMMRigid {
 
 namespace {
 
-/** The table, built once (the Yoshida weights need a cube root). Indexed by RigidBodyIntegrator::Splitting. */
+/** The table, built once (the Yoshida weights need a cube root). Indexed by RigidBodyOptions::Splitting. */
 const SplittingScheme* buildSchemes() {
     // Omelyan, Mryglod and Folk, Phys. Rev. E 65, 056706 (2002): the velocity form of their optimized
     // two-stage scheme. lambda minimises the norm of the third-order error terms; in closed form
@@ -37,7 +37,7 @@ const SplittingScheme* buildSchemes() {
 
 } // namespace
 
-const SplittingScheme& splittingScheme(RigidBodyIntegrator::Splitting splitting) {
+const SplittingScheme& splittingScheme(RigidBodyOptions::Splitting splitting) {
     static const SplittingScheme* schemes = buildSchemes();
     const int index = splitting;
     if (index < 0 || index >= NumSplittings) {

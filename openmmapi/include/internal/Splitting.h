@@ -1,7 +1,7 @@
 #ifndef OPENMMRIGID_SPLITTING_H_
 #define OPENMMRIGID_SPLITTING_H_
 
-#include "RigidBodyIntegrator.h"
+#include "RigidBodyOptions.h"
 #include "internal/windowsExportRigid.h"
 
 namespace OpenMMRigid {
@@ -24,7 +24,7 @@ namespace OpenMMRigid {
  */
 struct SplittingScheme {
     static const int MaxDrifts = 4;
-    /** The name of the RigidBodyIntegrator::Splitting value, for messages. */
+    /** The name of the RigidBodyOptions::Splitting value, for messages. */
     const char* name;
     /** s: the number of drifts, which is the number of force evaluations per step. */
     int numDrifts;
@@ -34,15 +34,15 @@ struct SplittingScheme {
     double drifts[MaxDrifts];
 };
 
-/** The number of splittings; RigidBodyIntegrator::Splitting takes the values 0 to NumSplittings - 1. */
+/** The number of splittings; RigidBodyOptions::Splitting takes the values 0 to NumSplittings - 1. */
 const int NumSplittings = 4;
 
 /**
  * The stages of a splitting.
  *
- * @throws OpenMMException if the value is not a RigidBodyIntegrator::Splitting, naming it and the valid ones
+ * @throws OpenMMException if the value is not a RigidBodyOptions::Splitting, naming it and the valid ones
  */
-OPENMM_EXPORT_RIGID const SplittingScheme& splittingScheme(RigidBodyIntegrator::Splitting splitting);
+OPENMM_EXPORT_RIGID const SplittingScheme& splittingScheme(RigidBodyOptions::Splitting splitting);
 
 } // namespace OpenMMRigid
 
