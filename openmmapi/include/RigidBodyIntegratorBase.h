@@ -142,6 +142,14 @@ protected:
     void loadCheckpoint(std::istream& stream);
     /** The integrator's random number seed (0: choose one per Context). */
     virtual int getRequestedSeed() const = 0;
+    /**
+     * The kick (a time, in ps; 0 for none) that takes the velocities of a checkpoint of this format
+     * version to those this build's step expects: applied to the bodies' momenta and the free
+     * particles, by the forces at the loaded positions, once the loaded state is projected.
+     */
+    virtual double getLoadedVelocityKick(int version) const {
+        return 0.0;
+    }
     /** Whether the step state's thermostat work belongs to this integrator's checkpoints. */
     virtual bool hasThermostatWork() const {
         return false;
@@ -163,11 +171,14 @@ private:
     const RigidBodySystem& getShapedBody(int b) const;
     /** Fit the bodies to the Context's positions (giving explicit bodies their shapes first, strictly). */
     void projectBodies();
+    /** Apply the kick getLoadedVelocityKick() asked for after a checkpoint, if any (the bodies must be projected). */
+    void applyLoadedVelocityKick();
     std::string className;
     std::vector<std::vector<int> > bodies;
     bool explicitBodies;
     RotationMethod rotationMethod;
     bool bound, forcesAreValid, needsProjection;
+    double loadedVelocityKick;
     OpenMM::Kernel kernel;
     std::unique_ptr<RigidBodySystem> topology;
 };

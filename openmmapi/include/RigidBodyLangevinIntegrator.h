@@ -11,11 +11,13 @@ namespace OpenMMRigid {
 /**
  * This is a Langevin integrator for systems of rigid molecules: it samples the canonical ensemble at
  * a given temperature, with the exact free drift of RigidBodyIntegrator as its deterministic part.
- * Each step is arranged as in OpenMM's LangevinMiddleIntegrator (the BAOAB splitting of B.
- * Leimkuhler and C. Matthews, Appl. Math. Res. Express 2013, 34 (2013); J. Zhang et al., J. Phys.
- * Chem. A 123, 6056 (2019)): a half kick by the forces and torques, a free drift for half a step,
- * the exact solution of an Ornstein-Uhlenbeck process for a whole step on the momenta, another
- * free drift for half a step, and a half kick; one force evaluation per step.
+ * Each step is arranged as in OpenMM's LangevinMiddleIntegrator (the LFMiddle form of the BAOAB
+ * splitting of B. Leimkuhler and C. Matthews, Appl. Math. Res. Express 2013, 34 (2013); Z. Zhang
+ * et al., J. Phys. Chem. A 123, 6056 (2019)): a kick by the forces and torques, a free drift for
+ * half a step, the exact solution of an Ornstein-Uhlenbeck process for a whole step on the momenta,
+ * another free drift for half a step, and the force evaluation at the new positions. That is BAOAB
+ * (half kick, half drift, Ornstein-Uhlenbeck, half drift, half kick) with the closing half kick of
+ * each step joined to the opening half kick of the next: the positions are BAOAB's.
  *
  * The Ornstein-Uhlenbeck step acts on each body's linear momentum P and on its angular momentum in
  * the principal (body) frame, L_k, with c = exp(-friction dt):
@@ -37,14 +39,18 @@ namespace OpenMMRigid {
  * components along the constraints are projected out, as LangevinMiddleIntegrator does); their
  * positions stay constrained.
  *
- * With friction 0 the step is the constant-energy kick, half drift, half drift, kick (no random
- * numbers are drawn); with temperature 0 and friction > 0 the motion is damped.
+ * With friction 0 the step is leapfrog Verlet with exact drifts (the positions of RigidBodyIntegrator's
+ * Verlet step; no random numbers are drawn); with temperature 0 and friction > 0 the motion is damped.
  *
- * Velocities are on-step, as for RigidBodyIntegrator. (BAOAB samples configurations very accurately;
- * the on-step velocities of a harmonic mode of angular frequency omega read a kinetic temperature
- * low by the factor 1 - (omega dt)^2/4. For the librations of rigid water the rotational temperature
- * so reads about 0.3 % low at 1 fs, 1 to 1.5 % at 2 fs and 3.5 to 4.5 % at 4 fs, while the density,
- * energy and structure agree with LangevinMiddleIntegrator + SETTLE.)
+ * Velocities are those of LangevinMiddleIntegrator: the Context holds the velocities after the
+ * Ornstein-Uhlenbeck step and the second half drift, half a step behind the positions
+ * (getVelocityTimeOffset() is dt/2), and the kinetic energy, the temperature and the translational
+ * and rotational kinetic energies are theirs. Their distribution is canonical: for a harmonic mode
+ * the sampled m <v^2> is exactly kT at any stable step, where BAOAB's on-step velocities read it low
+ * by the factor 1 - (omega dt)^2/4, so that the rotational temperature of rigid water read 1 to 1.5 %
+ * low at 2 fs and about 4 % at 4 fs from on-step velocities. Velocities one sets are taken as such
+ * half-step velocities (setVelocitiesToTemperature() shifts them by half a kick, as for
+ * LangevinMiddleIntegrator).
  *
  * Random numbers: each body and each free particle draws its normal deviates from a counter-based
  * generator (Philox4x32-10) keyed by the seed and counted by step and body, so that a trajectory
@@ -118,11 +124,22 @@ public:
     void setRandomNumberSeed(int seed) {
         randomNumberSeed = seed;
     }
+    /**
+     * Get the time by which the velocities the Context holds lag behind the positions: half a step,
+     * as for LangevinMiddleIntegrator (see the class description).
+     */
+    double getVelocityTimeOffset() const {
+        return 0.5*getStepSize();
+    }
 protected:
     int getRequestedSeed() const {
         return randomNumberSeed;
     }
     void executeStep(OpenMM::ContextImpl& context);
+    /** A checkpoint from before version 2 holds on-step velocities: they go half a kick back. */
+    double getLoadedVelocityKick(int version) const {
+        return (version < 2 ? -getVelocityTimeOffset() : 0.0);
+    }
 private:
     double temperature, friction;
     int randomNumberSeed;

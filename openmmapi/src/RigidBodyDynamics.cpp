@@ -356,7 +356,8 @@ void RigidBodyDynamics::closingKick(vector<Vec3>& positions, vector<Vec3>& veloc
     forEachBody([&](int b) {
         BodyState& state = states[b];
         Vec3 force, torque;
-        forceAndTorque(b, positions, forces, force, torque);
+        if (kick != 0.0)
+            forceAndTorque(b, positions, forces, force, torque);
         // (This rounds as kickAndDrift's kick, force*(kick/mass), does not; both are kept as they were
         // when the two were the halves of the Verlet step, so that its trajectories stay bit for bit.)
         const double mass = system.getBodyMass(b);
@@ -372,8 +373,9 @@ void RigidBodyDynamics::closingKick(vector<Vec3>& positions, vector<Vec3>& veloc
             velocities[p] = toVec3(state.velocity) + toVec3(omega).cross(positions[p] - toVec3(state.center));
         }
     });
-    for (int p : system.getFreeParticles())
-        velocities[p] += forces[p]*(kick*inverseMasses[p]);
+    if (kick != 0.0)
+        for (int p : system.getFreeParticles())
+            velocities[p] += forces[p]*(kick*inverseMasses[p]);
     if (constraints)
         constraints->applyToVelocities(positions, velocities, inverseMasses, constraintTolerance);
     writtenVelocities = velocities;

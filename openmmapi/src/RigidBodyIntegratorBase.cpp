@@ -19,14 +19,14 @@ using namespace std;
 namespace OpenMMRigid {
 
 RigidBodyIntegratorBase::RigidBodyIntegratorBase(const string& className, double stepSize) : className(className),
-        explicitBodies(false), rotationMethod(Exact), bound(false), forcesAreValid(false), needsProjection(true) {
+        explicitBodies(false), rotationMethod(Exact), bound(false), forcesAreValid(false), needsProjection(true), loadedVelocityKick(0.0) {
     setStepSize(stepSize);
     setConstraintTolerance(1e-5);
 }
 
 RigidBodyIntegratorBase::RigidBodyIntegratorBase(const string& className, double stepSize, const vector<vector<int> >& bodies) :
         className(className), bodies(bodies), explicitBodies(true), rotationMethod(Exact), bound(false),
-        forcesAreValid(false), needsProjection(true) {
+        forcesAreValid(false), needsProjection(true), loadedVelocityKick(0.0) {
     setStepSize(stepSize);
     setConstraintTolerance(1e-5);
     for (size_t b = 0; b < bodies.size(); b++)
@@ -140,6 +140,14 @@ void RigidBodyIntegratorBase::cleanup() {
     topology.reset();
 }
 
+void RigidBodyIntegratorBase::applyLoadedVelocityKick() {
+    if (loadedVelocityKick == 0.0)
+        return;
+    context->calcForcesAndEnergy(true, false, getIntegrationForceGroups());
+    getKernel().closingKick(*context, loadedVelocityKick, getConstraintTolerance());
+    loadedVelocityKick = 0.0;
+}
+
 void RigidBodyIntegratorBase::projectBodies() {
     IntegrateRigidBodyStepKernel& stepKernel = getKernel();
     const StepGeometry geometry = currentGeometry(*context, *topology);
@@ -182,6 +190,7 @@ void RigidBodyIntegratorBase::stateChanged(State::DataType changed) {
             else
                 projectBodies();
             needsProjection = false;
+            applyLoadedVelocityKick();
         }
         catch (const OpenMMException&) {
         }
@@ -196,7 +205,8 @@ namespace {
 
 /** The first bytes of the integrator's part of a checkpoint since version 1. */
 const char checkpointMagic[8] = {'O', 'M', 'M', 'R', 'I', 'G', 'I', 'D'};
-const int32_t checkpointVersion = 1;
+/** 2: RigidBodyLangevinIntegrator's velocities are half a step behind the positions (1: on-step). */
+const int32_t checkpointVersion = 2;
 
 } // namespace
 
@@ -262,6 +272,7 @@ void RigidBodyIntegratorBase::loadCheckpoint(istream& stream) {
         }
         stepState = saved;
     }
+    loadedVelocityKick = getLoadedVelocityKick(version);
     needsProjection = true;
     forcesAreValid = false;
 }
@@ -287,6 +298,7 @@ void RigidBodyIntegratorBase::step(int steps) {
             projectBodies();
             needsProjection = false;
             forcesAreValid = false;
+            applyLoadedVelocityKick();
         }
         if (!forcesAreValid || context->getLastForceGroups() != getIntegrationForceGroups())
             context->calcForcesAndEnergy(true, false, getIntegrationForceGroups());

@@ -85,15 +85,21 @@ void stepRigidBodyLangevinIntegrator(ContextImpl& context, IntegrateRigidBodySte
     const double friction = integrator.getFriction();
     const RigidBodyOptions::RotationMethod method = integrator.getRotationMethod();
     kernel.setGeometry(context, currentGeometry(context, bodies));
-    // BAOAB (Leimkuhler and Matthews, Appl. Math. Res. Express 2013, 34), as LangevinMiddleIntegrator:
-    // B, A, O, A, force, B. With no friction the O stage is the identity and is left out, so that the
-    // step is exactly the constant-energy kick, half drift, half drift, kick.
-    kernel.kickAndDrift(context, 0.5*dt, 0.5*dt, method, tolerance);
+    // LFMiddle (Z. Zhang, X. Liu, K. Yan, M. E. Tuckerman and J. Liu, J. Phys. Chem. A 123, 6056
+    // (2019)), as LangevinMiddleIntegrator: B(dt) A(dt/2) O A(dt/2), force. It is BAOAB (Leimkuhler
+    // and Matthews, Appl. Math. Res. Express 2013, 34) with the closing half kick of one step joined
+    // to the opening half kick of the next: the same positions, while the velocities the Context
+    // holds between steps are those after O and A, half a step behind the positions
+    // (getVelocityTimeOffset() = dt/2), whose distribution is canonical where BAOAB's on-step
+    // velocities read stiff modes (the librations of water) cold. With no friction O is the
+    // identity and is left out: the step is then leapfrog Verlet with exact drifts.
+    kernel.kickAndDrift(context, dt, 0.5*dt, method, tolerance);
     if (friction > 0.0)
         kernel.thermalize(context, exp(-friction*dt), BOLTZ*integrator.getTemperature(), state.seed, state.randomCounter++, tolerance);
     kernel.kickAndDrift(context, 0.0, 0.5*dt, method, tolerance);
     evaluateForces(context, integrator.getIntegrationForceGroups());
-    kernel.closingKick(context, 0.5*dt, tolerance);
+    // No kick: the rigid velocities written to the body particles, the constraints among free particles applied to velocities.
+    kernel.closingKick(context, 0.0, tolerance);
     kernel.finishStep(context, dt);
 }
 

@@ -58,7 +58,8 @@ public:
  *                        A kick of 0 reads no forces (the second half drift of a Langevin step).
  *   closingKick(a):      the last kick of the step, after which the rigid velocities
  *                        v = V + omega x (r - R) are written to the body particles; free particles:
- *                        kick and velocity constraints.
+ *                        kick and velocity constraints. A kick of 0 reads no forces (the end of a
+ *                        Langevin step, whose velocities are half a step behind the positions).
  *   thermalize(c, kT):   the exact Ornstein-Uhlenbeck step of the momenta (see below).
  *   scaleMomenta(a):     every momentum times a (a thermostat's rescaling, after the closing kick).
  *

@@ -49,8 +49,10 @@ OPENMM_EXPORT_RIGID void stepRigidBodyIntegrator(OpenMM::ContextImpl& context, I
         const RigidBodyIntegrator& integrator, const RigidBodySystem& bodies, StepState& state);
 
 /**
- * One step of RigidBodyLangevinIntegrator, on any platform: half kick, half drift, Ornstein-Uhlenbeck
- * step, half drift, force evaluation, half kick. Entry and exit as for stepRigidBodyIntegrator().
+ * One step of RigidBodyLangevinIntegrator, on any platform: kick, half drift, Ornstein-Uhlenbeck
+ * step, half drift, force evaluation (LFMiddle). On entry the Context holds the forces at the current
+ * positions and velocities half a step behind them; on exit, the forces at the new positions and
+ * the velocities half a step behind those.
  */
 OPENMM_EXPORT_RIGID void stepRigidBodyLangevinIntegrator(OpenMM::ContextImpl& context, IntegrateRigidBodyStepKernel& kernel,
         const RigidBodyLangevinIntegrator& integrator, const RigidBodySystem& bodies, StepState& state);

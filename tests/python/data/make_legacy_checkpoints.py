@@ -1,7 +1,8 @@
-"""Writes the legacy checkpoints that test_state_coherence.py loads (run: python make_legacy_checkpoints.py).
+"""Writes the legacy checkpoints that test_state_coherence.py loads (run: python make_legacy_checkpoints.py PREFIX).
 
-The files in this folder were written by this script with openmmrigid built from commit f49f08c
-(OpenMM 8.6.1, numpy 2.4, Reference platform), before the checkpoint format changed. They must keep loading:
+The files in this folder were written by this script, with OpenMM 8.6.1, numpy 2.4 and the Reference
+platform: legacy_* (format 0, no header) with openmmrigid built from commit f49f08c, v1_* (format 1,
+whose RigidBodyLangevinIntegrator velocities are on-step) from commit 504cec4. They must keep loading:
 the test builds the same System and integrator with the functions below, loads each checkpoint into a
 fresh Context, takes STEPS_AFTER steps and compares the positions with the saved ones.
 
@@ -9,9 +10,10 @@ The system: four TIP3P waters in a 1.2 nm periodic box (NonbondedForce, CutoffPe
 their bodies found from SETTLE-like constraints ("constraints") or given explicitly with no
 constraints ("explicit"). For each body source, three integrators: RigidBodyIntegrator without
 thermostat ("plain"), with setThermostat(300 K, 0.1 ps) ("thermostat"), and
-RigidBodyLangevinIntegrator(300 K, 5/ps) ("langevin"). Each run: positions and velocities set from
+RigidBodyLangevinIntegrator(300 K, 5/ps) ("langevin"; in format 1 also "langevintrap", with every
+particle in a harmonic trap about the box centre). Each run: positions and velocities set from
 fixed numbers, STEPS_BEFORE steps, checkpoint to legacy_<kind>_<bodies>.chk, STEPS_AFTER more steps,
-positions (nm) to legacy_<kind>_<bodies>.npy.
+positions (nm) to legacy_<kind>_<bodies>.npy (PREFIX_<kind>_<bodies> for another prefix).
 """
 
 import pathlib
@@ -23,6 +25,9 @@ from openmm import unit
 import openmmrigid
 
 KINDS = ["plain", "thermostat", "langevin"]
+# Only in format 1 (v1_*): Langevin in a harmonic trap, whose forces make on-step and half-step
+# velocities differ (the four waters of the others are beyond each other's cutoff: no force at all).
+V1_KINDS = KINDS + ["langevintrap"]
 BODY_SOURCES = ["constraints", "explicit"]
 STEPS_BEFORE = 10
 STEPS_AFTER = 5
@@ -52,7 +57,7 @@ def bodies():
     return [[3 * k, 3 * k + 1, 3 * k + 2] for k in range(4)]
 
 
-def legacy_system(bodySource):
+def legacy_system(bodySource, kind="plain"):
     system = openmm.System()
     system.setDefaultPeriodicBoxVectors(openmm.Vec3(EDGE, 0, 0), openmm.Vec3(0, EDGE, 0), openmm.Vec3(0, 0, EDGE))
     nonbonded = openmm.NonbondedForce()
@@ -72,12 +77,17 @@ def legacy_system(bodySource):
             system.addConstraint(o, h2, OH)
             system.addConstraint(h1, h2, HH)
     system.addForce(nonbonded)
+    if kind == "langevintrap":
+        trap = openmm.CustomExternalForce("500*((x-0.6)^2 + (y-0.6)^2 + (z-0.6)^2)")
+        for i in range(system.getNumParticles()):
+            trap.addParticle(i, [])
+        system.addForce(trap)
     return system
 
 
 def legacy_integrator(kind, bodySource):
     explicit = bodies() if bodySource == "explicit" else None
-    if kind == "langevin":
+    if kind.startswith("langevin"):
         integrator = (openmmrigid.RigidBodyLangevinIntegrator(300.0, 5.0, STEP_SIZE, explicit) if explicit
                       else openmmrigid.RigidBodyLangevinIntegrator(300.0, 5.0, STEP_SIZE))
     else:
@@ -90,29 +100,30 @@ def legacy_integrator(kind, bodySource):
 
 
 def legacy_context(kind, bodySource, platformName="Reference"):
-    system = legacy_system(bodySource)
+    system = legacy_system(bodySource, kind)
     integrator = legacy_integrator(kind, bodySource)
     context = openmm.Context(system, integrator, openmm.Platform.getPlatformByName(platformName))
     return context, integrator
 
 
-def stem(kind, bodySource):
-    return f"legacy_{kind}_{bodySource}"
+def stem(kind, bodySource, prefix="legacy"):
+    return f"{prefix}_{kind}_{bodySource}"
 
 
-def main():
+def main(prefix="legacy"):
     positions, velocities = water_positions()
     for bodySource in BODY_SOURCES:
-        for kind in KINDS:
+        for kind in (KINDS if prefix == "legacy" else V1_KINDS):
             context, integrator = legacy_context(kind, bodySource)
             context.setPositions(positions)
             context.setVelocities(velocities)
             integrator.step(STEPS_BEFORE)
-            (HERE / f"{stem(kind, bodySource)}.chk").write_bytes(context.createCheckpoint())
+            (HERE / f"{stem(kind, bodySource, prefix)}.chk").write_bytes(context.createCheckpoint())
             integrator.step(STEPS_AFTER)
             reached = context.getState(getPositions=True).getPositions(asNumpy=True).value_in_unit(unit.nanometer)
-            np.save(HERE / f"{stem(kind, bodySource)}.npy", reached)
+            np.save(HERE / f"{stem(kind, bodySource, prefix)}.npy", reached)
 
 
 if __name__ == "__main__":
-    main()
+    import sys
+    main(*sys.argv[1:2])
