@@ -115,6 +115,18 @@ def block_mean(samples, blocks=20):
     return samples.mean(), means.std(ddof=1) / np.sqrt(blocks)
 
 
+def equilibrated_langevin(box, temperature, friction, stepFs, seed, steps):
+    """A RigidBodyLangevinIntegrator (friction in 1/ps, step in fs) and its Context on the CPU
+    platform, from the box's state, after `steps` steps of its own equilibration."""
+    system, state = box
+    integrator = RigidBodyLangevinIntegrator(temperature * unit.kelvin, friction / unit.picosecond, stepFs * unit.femtoseconds)
+    integrator.setRandomNumberSeed(seed)
+    context = openmm.Context(system, integrator, *systems.platform_and_properties("CPU"))
+    context.setState(state)
+    integrator.step(steps)
+    return context, integrator
+
+
 def test_water_reaches_the_bath_temperature(small_water_box):
     """The mean translational and rotational temperatures, each from its own kinetic energy and its
     3 N degrees of freedom, are 300 K within 4.5 standard errors of 20 block means (10 ps at 1 fs;
@@ -125,11 +137,7 @@ def test_water_reaches_the_bath_temperature(small_water_box):
     something: below 1 % of the target."""
     system, state = small_water_box
     target = 300.0
-    integrator = RigidBodyLangevinIntegrator(target * unit.kelvin, 50 / unit.picosecond, 1 * unit.femtoseconds)
-    integrator.setRandomNumberSeed(11)
-    context = openmm.Context(system, integrator, *systems.platform_and_properties("CPU"))
-    context.setState(state)
-    integrator.step(1000)
+    context, integrator = equilibrated_langevin(small_water_box, target, friction=50, stepFs=1, seed=11, steps=1000)
     numWaters = integrator.getNumBodies()
     assert numWaters == system.getNumParticles() // 3 and integrator.getNumDegreesOfFreedom() == 6 * numWaters
     assert_water_temperatures(integrator, target, samples=5000, every=2, blocks=20)
@@ -141,13 +149,8 @@ def test_water_temperature_reads_right_at_4_fs(small_water_box):
     it reports are LangevinMiddleIntegrator's, half a step behind the positions, whose distribution
     is canonical. (BAOAB's on-step velocities read the rotational temperature about 4 % low here.)
     Friction 20/ps; samples 8 fs apart, 20 blocks of 2 ps."""
-    system, state = small_water_box
     target = 300.0
-    integrator = RigidBodyLangevinIntegrator(target * unit.kelvin, 20 / unit.picosecond, 4 * unit.femtoseconds)
-    integrator.setRandomNumberSeed(13)
-    context = openmm.Context(system, integrator, *systems.platform_and_properties("CPU"))
-    context.setState(state)
-    integrator.step(500)
+    context, integrator = equilibrated_langevin(small_water_box, target, friction=20, stepFs=4, seed=13, steps=500)
     assert_water_temperatures(integrator, target, samples=5000, every=2, blocks=20, label="4 fs: ", tolerance=0.015)
 
 
