@@ -9,8 +9,13 @@
 #ifndef OPENMMRIGID_CORE_PRELUDE_COMMON_H_
 #define OPENMMRIGID_CORE_PRELUDE_COMMON_H_
 
+/* OpenCL C: the runtime compilers define __OPENCL_VERSION__, clang's offline one __OPENCL_C_VERSION__ */
+#if defined(__OPENCL_VERSION__) || defined(__OPENCL_C_VERSION__)
+#define RIGID_OPENCL 1
+#endif
+
 #ifndef DEVICE
-#ifdef __OPENCL_VERSION__
+#ifdef RIGID_OPENCL
 #define DEVICE
 #else
 #define DEVICE __device__
@@ -20,7 +25,7 @@
 #define RIGID_FUNCTION DEVICE
 #define RIGID_HOT_FUNCTION DEVICE
 
-#ifdef __OPENCL_VERSION__
+#ifdef RIGID_OPENCL
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 typedef uint RigidUInt32;
 typedef ulong RigidUInt64;

@@ -623,7 +623,7 @@ RIGID_FUNCTION void rigidEllipticIntegralInitialize(RigidRotor* r, RigidJacobi* 
  */
 RIGID_FUNCTION int rigidRotorInitializeAsymmetric(RigidRotor* r, int requested, int fused, double t,
                                                   RigidThetaValues* fusedValue) {
-    double scaledOmega[3], w0[3], qa[3][3], t1[3][3];
+    double scaledOmega[3], w0[3], qa[3][3], t1[3][3], b[3][3];
     RigidJacobi f0;
     int j, c;
     const double scale = rigidRotorScaleFrequency(r->omega0, scaledOmega);
@@ -650,7 +650,10 @@ RIGID_FUNCTION int rigidRotorInitializeAsymmetric(RigidRotor* r, int requested, 
         for (c = 0; c < 3; c++)
             qa[j][c] = r->axisSign[j]*r->attitude0[r->axisOf[j]][c];
     rigidBodyToInvariantFrame(r, f0.sn, f0.cn, f0.dn, t1);
-    rigidMultiplyTransposed(t1, qa, r->b);
+    rigidMultiplyTransposed(t1, qa, b);
+    for (j = 0; j < 3; j++)
+        for (c = 0; c < 3; c++)
+            r->b[j][c] = b[j][c];
     r->frequencyScale = scale;
     return RigidStatusOk;
 }
@@ -668,7 +671,7 @@ RIGID_FUNCTION int rigidRotorInitializeAsymmetric(RigidRotor* r, int requested, 
  */
 RIGID_FUNCTION int rigidRotorInitialize(RigidRotor* r, const RigidShape* shape, const double* omega, double attitude[3][3],
                                         int requested, int fused, double t, RigidThetaValues* fusedValue) {
-    int k, zeroComponents = 0;
+    int k, j, zeroComponents = 0;
     if (requested != RigidRepresentationAutomatic && requested != RigidRepresentationThetaSeries &&
             requested != RigidRepresentationEllipticIntegral)
         return RigidStatusUnknownRepresentation;
@@ -684,7 +687,9 @@ RIGID_FUNCTION int rigidRotorInitialize(RigidRotor* r, const RigidShape* shape, 
         r->omega0[k] = (shape->kind == RigidKindLinear && shape->moments[k] == 0.0 ? 0.0 : omega[k]);
         zeroComponents += (r->omega0[k] == 0.0);
     }
-    rigidCopyMatrix(r->attitude0, attitude);
+    for (k = 0; k < 3; k++)
+        for (j = 0; j < 3; j++)
+            r->attitude0[k][j] = attitude[k][j];
     r->energy = 0.5*(r->moments[0]*r->omega0[0]*r->omega0[0] + r->moments[1]*r->omega0[1]*r->omega0[1] +
                      r->moments[2]*r->omega0[2]*r->omega0[2]);
     r->steady = (zeroComponents >= 2 || r->kind == RigidKindSpherical || r->kind == RigidKindLinear);
