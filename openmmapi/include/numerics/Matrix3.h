@@ -78,11 +78,16 @@ inline double determinant(const Matrix3& a) {
 
 /** The largest entry of |a^T a - 1|: how far a is from orthonormal. */
 inline double orthonormalityError(const Matrix3& a) {
-    Matrix3 g = multiplyTransposed(a, a);
+    // a^T a is symmetric to the last bit (its (i, j) and (j, i) entries are the same products), so
+    // the upper triangle holds every value; a NaN entry is passed over, as std::fmax does.
     double worst = 0.0;
     for (int i = 0; i < 3; i++)
-        for (int j = 0; j < 3; j++)
-            worst = std::fmax(worst, std::fabs(g[i][j] - (i == j ? 1.0 : 0.0)));
+        for (int j = i; j < 3; j++) {
+            double g = a[0][i]*a[0][j] + a[1][i]*a[1][j] + a[2][i]*a[2][j];
+            double error = std::fabs(g - (i == j ? 1.0 : 0.0));
+            if (error > worst)
+                worst = error;
+        }
     return worst;
 }
 
