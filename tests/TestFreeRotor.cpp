@@ -989,6 +989,19 @@ void testClassification() {
     RigidShape point;
     ASSERT_EQUAL(RigidStatusOk, rigidClassifyMoments(Vector3{0, 0, 0}.data(), &point));
     ASSERT_EQUAL(RigidKindPoint, point.kind);
+    // A point does not turn: rigidRotorAdvance keeps its attitude and zeroes omega.
+    Matrix3 original = randomRotation();
+    double attitude[3][3];
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            attitude[i][j] = original[i][j];
+    Vector3 omega = {0.3, -0.2, 0.1};
+    ASSERT_EQUAL(RigidStatusOk, rigidRotorAdvance(&point, omega.data(), attitude, 1.5));
+    for (int i = 0; i < 3; i++) {
+        ASSERT_EQUAL_TOL(0.0, omega[i], 0.0);
+        for (int j = 0; j < 3; j++)
+            ASSERT_EQUAL_TOL(original[i][j], attitude[i][j], 0.0);
+    }
 }
 
 /**

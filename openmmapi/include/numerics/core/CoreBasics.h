@@ -50,13 +50,6 @@ RIGID_FUNCTION double rigidMax4(double a, double b, double c, double d) {
     return (abc < d ? d : abc);
 }
 
-RIGID_FUNCTION void rigidCopyMatrix(double to[3][3], double from[3][3]) {
-    int i, j;
-    for (i = 0; i < 3; i++)
-        for (j = 0; j < 3; j++)
-            to[i][j] = from[i][j];
-}
-
 /** c = a b (c must not alias a or b). */
 RIGID_FUNCTION void rigidMultiply(double a[3][3], double b[3][3], double c[3][3]) {
     int i, j;

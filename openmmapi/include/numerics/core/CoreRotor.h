@@ -659,9 +659,9 @@ RIGID_FUNCTION int rigidRotorInitializeAsymmetric(RigidRotor* r, int requested, 
 }
 
 /**
- * Build the rotor of a body from its initial state. Contract: shape from rigidClassifyMoments()
- * (any kind but a point), omega and attitude finite, attitude orthonormal with determinant +1. For a
- * linear body the component of omega along its axis is dropped. With fused, an asymmetric top that
+ * Build the rotor of a body from its initial state. Contract: shape from rigidClassifyMoments(),
+ * omega and attitude finite, attitude orthonormal with determinant +1. For a linear body the
+ * component of omega along its axis is dropped; a point does not turn (its omega becomes zero). With fused, an asymmetric top that
  * uses the theta series also evaluates the series at time t into *fusedValue (rigidRotorAdvance).
  *
  * @param requested  a RigidRepresentation
@@ -684,7 +684,9 @@ RIGID_FUNCTION int rigidRotorInitialize(RigidRotor* r, const RigidShape* shape, 
     r->frequencyScale = 1.0;
     for (k = 0; k < 3; k++) {
         r->moments[k] = shape->moments[k];
-        r->omega0[k] = (shape->kind == RigidKindLinear && shape->moments[k] == 0.0 ? 0.0 : omega[k]);
+        /* no rotation about a zero moment's axis (a linear body's, or a point's) */
+        r->omega0[k] = ((shape->kind == RigidKindLinear || shape->kind == RigidKindPoint) && shape->moments[k] == 0.0 ?
+                        0.0 : omega[k]);
         zeroComponents += (r->omega0[k] == 0.0);
     }
     for (k = 0; k < 3; k++)
@@ -692,7 +694,8 @@ RIGID_FUNCTION int rigidRotorInitialize(RigidRotor* r, const RigidShape* shape, 
             r->attitude0[k][j] = attitude[k][j];
     r->energy = 0.5*(r->moments[0]*r->omega0[0]*r->omega0[0] + r->moments[1]*r->omega0[1]*r->omega0[1] +
                      r->moments[2]*r->omega0[2]*r->omega0[2]);
-    r->steady = (zeroComponents >= 2 || r->kind == RigidKindSpherical || r->kind == RigidKindLinear);
+    r->steady = (zeroComponents >= 2 || r->kind == RigidKindSpherical || r->kind == RigidKindLinear ||
+                 r->kind == RigidKindPoint);
     if (r->kind == RigidKindSymmetric)
         r->symmetricPrecession = (1.0 - r->moments[r->uniqueAxis]/r->moments[(r->uniqueAxis + 1)%3])*r->omega0[r->uniqueAxis];
     if (r->kind == RigidKindAsymmetric && !r->steady)
@@ -761,10 +764,11 @@ RIGID_FUNCTION void rigidRotorEvolve(const RigidRotor* r, double t, double* omeg
  * (omega, attitude). The same result as rigidRotorInitialize() followed by rigidRotorEvolve(), with
  * the theta series at the start and at t summed in one pass.
  *
- * Contract (nothing is checked): shape comes from rigidClassifyMoments() and is not a point; omega
+ * Contract (nothing is checked): shape comes from rigidClassifyMoments() (with RigidStatusOk); omega
  * (the body-frame angular velocity, 1/time) and t are finite; attitude (lab to body) is orthonormal
  * with determinant +1 to rounding. For a linear body the component of omega along its axis is set to
- * zero. Under this contract the status is always RigidStatusOk.
+ * zero; a point keeps its attitude and gets omega = 0 (a caller may as well skip it). Under this
+ * contract the status is always RigidStatusOk.
  */
 RIGID_FUNCTION int rigidRotorAdvance(const RigidShape* shape, double* omega, double attitude[3][3], double t) {
     RigidRotor r;
