@@ -8,6 +8,11 @@
  *                     what an integrator pays for each body every step,      *
  *                     since every kick changes the angular momentum.         *
  *   evolve            one rotor evolved to many different times.             *
+ *   advance           FreeRotor::advance: construct and evolve once, fused,  *
+ *                     with the input checks.                                 *
+ *   core-advance      rigidRotorAdvance, the core's unchecked entry point    *
+ *                     with the body's RigidShape classified beforehand: what *
+ *                     an integrator's drift calls per body and step.         *
  *                                                                            *
  * Inputs (8192 random states per kind, and random times) are prepared in     *
  * advance and cycled through; every result is stored and summed into a      *
@@ -174,6 +179,28 @@ int main() {
                 }
             };
             rows.push_back({c.kind, "advance", representation, time(advance)});
+            total += checksum(outputs);
+            // The core's entry point, as the integrator calls it: the shape classified once per body.
+            std::vector<RigidShape> shapes(INPUTS);
+            for (int i = 0; i < INPUTS; i++)
+                shapes[i] = FreeRotor::classify(in[i].moments);
+            const RigidShape* shape = shapes.data();
+            auto coreAdvance = [&]() {
+                for (int call = 0; call < CALLS; call++) {
+                    const Input& x = in[call%INPUTS];
+                    Output& o = out[call%INPUTS];
+                    double attitude[3][3];
+                    o.omega = x.omega;
+                    for (int i = 0; i < 3; i++)
+                        for (int j = 0; j < 3; j++)
+                            attitude[i][j] = x.attitude[i][j];
+                    rigidRotorAdvance(&shape[call%INPUTS], o.omega.data(), attitude, x.t);
+                    for (int i = 0; i < 3; i++)
+                        for (int j = 0; j < 3; j++)
+                            o.attitude[i][j] = attitude[i][j];
+                }
+            };
+            rows.push_back({c.kind, "core-advance", representation, time(coreAdvance)});
             total += checksum(outputs);
         }
         // Evolve only: one rotor, many different times spread over several rotation periods.

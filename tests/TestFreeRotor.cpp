@@ -6,9 +6,9 @@
  *                                                                            *
  * Every check compares against something known: the paper's Section 5        *
  * example (reference values from a DOP853 integration at rtol 1e-14, see     *
- * shared/reference/free-rotor-notes.md), an independent fourth-order         *
- * Runge-Kutta integration of Euler's equations and dA/dt = -W(omega) A done  *
- * here with a step small enough that its error is below 1e-12, closed forms  *
+ * docs/free-rotor-notes.md), an independent fourth-order Runge-Kutta         *
+ * integration of Euler's equations and dA/dt = -W(omega) A done here with a  *
+ * step small enough that its error is below 1e-12, closed forms              *
  * (steady rotation about a principal axis), conservation laws, and the group *
  * properties of an exact flow (composition, time reversal, scaling).         *
  *                                                                            *
@@ -18,6 +18,7 @@
  * -------------------------------------------------------------------------- */
 
 #include "numerics/FreeRotor.h"
+#include "numerics/SymmetricEigen.h"
 #include "openmm/internal/AssertionUtilities.h"
 #include <algorithm>
 #include <cmath>
@@ -273,7 +274,7 @@ static Vector3 nearSeparatrixOmega(const Vector3& moments, Vector3 omega, double
     return omega;
 }
 
-/** Delicate inputs of the asymmetric top (notes, "Where the formulas are delicate"). */
+/** Delicate inputs of the asymmetric top (docs/free-rotor-notes.md, "Where the formulas are delicate"). */
 static std::vector<Body> delicateBodies() {
     std::vector<Body> bodies;
     Matrix3 identity = {{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}};
@@ -896,6 +897,140 @@ void testInvalidInput() {
     (void) accepted;
 }
 
+/**
+ * The one classification (rigidClassifyMoments, used by the rotor and the body topology): moments
+ * equal to within 1e-13 of the largest are one kind and are made exactly equal; moments 1e-12 apart
+ * stay an asymmetric top. A snapped rotor is exactly the rotor of its snapped moments, and (unless a
+ * moment was taken as zero) follows the motion of the given moments (RK4 reference) to 1e-9.
+ */
+void testClassification() {
+    struct Case { Vector3 moments; FreeRotor::Kind kind; };
+    std::vector<Case> cases = {{{2, 2, 2}, FreeRotor::Spherical}, {{2, 2*(1 + 4e-14), 2*(1 - 4e-14)}, FreeRotor::Spherical},
+                               {{2, 2, 3}, FreeRotor::Symmetric}, {{3, 2, 2*(1 + 5e-14)}, FreeRotor::Symmetric},
+                               {{2*(1 - 5e-14), 3, 2}, FreeRotor::Symmetric}, {{0, 2, 2}, FreeRotor::Linear},
+                               {{2, 1e-14, 2*(1 + 5e-14)}, FreeRotor::Linear}, {{1, 1 + 1e-12, 3}, FreeRotor::Asymmetric},
+                               {{1e-12, 1, 1}, FreeRotor::Symmetric}, {{10, 10*(1 + 1e-12), 26}, FreeRotor::Asymmetric}};
+    for (const Case& c : cases) {
+        Body body = {c.moments, randomOmega(), randomRotation(), "classification case"};
+        FreeRotor rotor = makeRotor(body);
+        std::string where = describe(body, 0.0);
+        if (rotor.getKind() != c.kind)
+            throwException(__FILE__, __LINE__, "kind " + std::string(FreeRotor::kindName(rotor.getKind())) + " for " + where);
+        const Vector3& used = rotor.getMoments();
+        const double largest = std::max({c.moments[0], c.moments[1], c.moments[2]});
+        for (int k = 0; k < 3; k++)
+            assertSmall(std::fabs(used[k] - c.moments[k]), 1e-13*largest, "snapped moment", where, __LINE__);
+        int equal = (used[0] == used[1]) + (used[1] == used[2]) + (used[0] == used[2]);
+        int expectedEqual = (c.kind == FreeRotor::Spherical ? 3 : c.kind == FreeRotor::Asymmetric ? 0 : 1);
+        ASSERT_EQUAL(expectedEqual, equal);
+        // The snapped rotor is the rotor of the snapped moments, to the last bit.
+        FreeRotor snapped = makeRotor({used, body.omega, body.attitude, "snapped"});
+        double scale = omegaScale(body);
+        std::vector<double> times = {0.7/scale, 2.9/scale};
+        std::vector<State> reference = integrate(body, times);
+        for (size_t n = 0; n < times.size(); n++) {
+            State a = evolve(rotor, times[n]), b = evolve(snapped, times[n]);
+            assertSmall(maxDifference(a.omega, b.omega), 0.0, "snapped rotor vs rotor of the snapped moments", where, __LINE__);
+            assertSmall(maxDifference(a.attitude, b.attitude), 0.0, "snapped rotor vs rotor of the snapped moments", where, __LINE__);
+            if (std::min({c.moments[0], c.moments[1], c.moments[2]}) < 1e-3*largest)
+                continue;  // a tiny moment: too stiff for the RK4 reference (and one taken as zero drops its spin)
+            assertSmall(maxDifference(reference[n].omega, a.omega)/scale, 1e-9, "snapped rotor vs RK4", where, __LINE__);
+            assertSmall(maxDifference(reference[n].attitude, a.attitude), 1e-9, "snapped rotor vs RK4", where, __LINE__);
+        }
+    }
+    // What the topology sees: the moments of a symmetric or spherical shape whose coordinates were
+    // differences of positions 2 to 6 nm from the origin (RigidBody::setShape's arithmetic: principal
+    // axes, then the diagonal of the rotated coordinates' inertia tensor) stay symmetric or spherical.
+    const double r = 0.1/std::sqrt(3.0);
+    std::vector<Vector3> tetrahedron = {{r, r, r}, {r, -r, -r}, {-r, r, -r}, {-r, -r, r}};
+    std::vector<Vector3> pyramid = {{0, 0, 0.04}};
+    for (int k = 0; k < 3; k++)
+        pyramid.push_back({0.094*std::cos(2*M_PI*k/3), 0.094*std::sin(2*M_PI*k/3), 0.0});
+    double worst = 0.0;
+    for (int trial = 0; trial < 200; trial++) {
+        bool spherical = (trial%2 == 0);
+        const std::vector<Vector3>& shape = (spherical ? tetrahedron : pyramid);
+        std::vector<double> masses = (spherical ? std::vector<double>{1, 1, 1, 1} : std::vector<double>{14, 1, 1, 1});
+        Matrix3 rotation = randomRotation();
+        Vector3 centre = {uniform(2, 6), uniform(2, 6), uniform(2, 6)};
+        std::vector<Vector3> positions;
+        Vector3 mean = {0, 0, 0};
+        double total = 0;
+        for (size_t i = 0; i < shape.size(); i++) {
+            Vector3 p = multiply(rotation, shape[i]);
+            positions.push_back({p[0] + centre[0], p[1] + centre[1], p[2] + centre[2]});
+            for (int k = 0; k < 3; k++)
+                mean[k] += masses[i]*positions.back()[k];
+            total += masses[i];
+        }
+        std::vector<Vector3> centred;
+        for (const Vector3& p : positions)
+            centred.push_back({p[0] - mean[0]/total, p[1] - mean[1]/total, p[2] - mean[2]/total});
+        Vector3 moments;
+        Matrix3 axes;
+        principalAxes(centred, masses, moments, axes);
+        for (int k = 0; k < 3; k++) {
+            moments[k] = 0.0;
+            for (size_t i = 0; i < centred.size(); i++) {
+                Vector3 b = multiplyTransposed(axes, centred[i]);
+                moments[k] += masses[i]*(dot(b, b) - b[k]*b[k]);
+            }
+        }
+        const double largest = std::max({moments[0], moments[1], moments[2]});
+        worst = std::max(worst, (spherical ? std::max({moments[0], moments[1], moments[2]}) - std::min({moments[0], moments[1], moments[2]}) :
+                                 std::min({std::fabs(moments[0] - moments[1]), std::fabs(moments[1] - moments[2]), std::fabs(moments[0] - moments[2])}))/largest);
+        RigidShape classified = FreeRotor::classify(moments);
+        ASSERT_EQUAL(spherical ? RigidKindSpherical : RigidKindSymmetric, classified.kind);
+    }
+    std::cout << "largest relative spread of equal moments from coordinates 2-6 nm from the origin: " << worst << std::endl;
+    // Errors: a point (all moments zero) and the impossible cases are no rotor.
+    assertThrowsInvalidArgument([]() { FreeRotor::classify({1e-20, 1e-20, 1.0}); }, "two zero moments", __LINE__);
+    assertThrowsInvalidArgument([]() { FreeRotor::classify({0, 1, 1 + 1e-12}); }, "zero moment, unequal others", __LINE__);
+    RigidShape point;
+    ASSERT_EQUAL(RigidStatusOk, rigidClassifyMoments(Vector3{0, 0, 0}.data(), &point));
+    ASSERT_EQUAL(RigidKindPoint, point.kind);
+    // A point does not turn: rigidRotorAdvance keeps its attitude and zeroes omega.
+    Matrix3 original = randomRotation();
+    double attitude[3][3];
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            attitude[i][j] = original[i][j];
+    Vector3 omega = {0.3, -0.2, 0.1};
+    ASSERT_EQUAL(RigidStatusOk, rigidRotorAdvance(&point, omega.data(), attitude, 1.5));
+    for (int i = 0; i < 3; i++) {
+        ASSERT_EQUAL_TOL(0.0, omega[i], 0.0);
+        for (int j = 0; j < 3; j++)
+            ASSERT_EQUAL_TOL(original[i][j], attitude[i][j], 0.0);
+    }
+}
+
+/**
+ * The integrator's entry point rigidRotorAdvance() (no checks) gives what FreeRotor::advance gives,
+ * bit for bit, for every kind and the delicate bodies.
+ */
+void testCoreAdvance() {
+    for (const Body& body : allBodies(5)) {
+        RigidShape shape = FreeRotor::classify(body.moments);
+        double scale = omegaScale(body);
+        for (double t : {0.0, 0.02/scale, -1.1/scale, 30.0/scale}) {
+            State expected = {body.omega, body.attitude};
+            FreeRotor::advance(body.moments, expected.omega, expected.attitude, t);
+            Vector3 omega = body.omega;
+            double attitude[3][3];
+            for (int i = 0; i < 3; i++)
+                for (int j = 0; j < 3; j++)
+                    attitude[i][j] = body.attitude[i][j];
+            ASSERT_EQUAL(RigidStatusOk, rigidRotorAdvance(&shape, omega.data(), attitude, t));
+            Matrix3 a;
+            for (int i = 0; i < 3; i++)
+                for (int j = 0; j < 3; j++)
+                    a[i][j] = attitude[i][j];
+            assertSmall(maxDifference(expected.omega, omega), 0.0, "rigidRotorAdvance omega", describe(body, t), __LINE__);
+            assertSmall(maxDifference(expected.attitude, a), 0.0, "rigidRotorAdvance A", describe(body, t), __LINE__);
+        }
+    }
+}
+
 int main() {
     try {
         testPaperExample();
@@ -913,6 +1048,8 @@ int main() {
         testTinyOffAxisComponents();
         testAdvance();
         testInvalidInput();
+        testClassification();
+        testCoreAdvance();
     }
     catch (const std::exception& e) {
         std::cout << "exception: " << e.what() << std::endl;

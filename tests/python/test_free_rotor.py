@@ -694,6 +694,37 @@ def test_kind(moments, kind):
         assert rotor.representation == "closed-form"
 
 
+@pytest.mark.parametrize("moments, kind, equal", [
+    ((2.0, 2.0 * (1 + 5e-14), 3.0), "symmetric", (0, 1)),        # within 1e-13 of the largest
+    ((3.0, 1.0 * (1 - 2e-14), 1.0), "symmetric", (1, 2)),
+    ((2.0, 2.0 * (1 + 4e-14), 2.0 * (1 - 4e-14)), "spherical", (0, 1, 2)),
+    ((1e-14, 2.0, 2.0 * (1 + 3e-14)), "linear", (1, 2)),         # a moment below 1e-13 of the largest is zero
+    ((10.0, 10.0 * (1 + 1e-12), 26.0), "asymmetric", ()),        # 1e-12 apart: a genuine asymmetric top
+])
+def test_classification_snaps_moments_within_tolerance(moments, kind, equal):
+    """One classification with one tolerance (1e-13 of the largest moment): moments it finds equal
+    (or zero) are made exactly so, and the motion is the exact motion of those moments; against the
+    independent reference it matches the given moments within the usual tolerance."""
+    rng = np.random.default_rng(61)
+    omega = rng.normal(size=3)
+    attitude = reference.random_rotation(rng)
+    rotor = FreeRotor(moments, omega, attitude)
+    assert rotor.kind == kind
+    used = rotor.moments
+    assert np.all(np.abs(used - np.asarray(moments)) <= 1e-13 * max(moments))
+    for i, j in itertools.combinations(equal, 2):
+        assert used[i] == used[j]
+    if kind == "linear":
+        assert used[0] == 0.0
+    exact = FreeRotor(used, omega, attitude)
+    times = np.array([0.1, 1.0, 2.6, -1.3]) * rotation_period(omega)
+    got, want = rotor.evolve(times), exact.evolve(times)
+    np.testing.assert_array_equal(got[0], want[0])
+    np.testing.assert_array_equal(got[1], want[1])
+    if kind != "linear":
+        assert_matches_reference(rotor, np.asarray(moments), omega, attitude, times)
+
+
 # ============================================================================================
 # Bad input: openmm.OpenMMException with a message naming the problem
 

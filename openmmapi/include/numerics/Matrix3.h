@@ -7,6 +7,7 @@
  * rounding of the few products and sums they perform.
  */
 
+#include "numerics/RigidCore.h"
 #include <array>
 #include <cmath>
 
@@ -24,7 +25,7 @@ inline double dot(const Vector3& a, const Vector3& b) {
 }
 
 inline double norm(const Vector3& a) {
-    return std::hypot(a[0], a[1], a[2]);
+    return rigidNorm(a.data());
 }
 
 inline Vector3 cross(const Vector3& a, const Vector3& b) {
@@ -77,41 +78,31 @@ inline double determinant(const Matrix3& a) {
 
 /** The largest entry of |a^T a - 1|: how far a is from orthonormal. */
 inline double orthonormalityError(const Matrix3& a) {
-    Matrix3 g = multiplyTransposed(a, a);
+    // a^T a is symmetric to the last bit (its (i, j) and (j, i) entries are the same products), so
+    // the upper triangle holds every value; a NaN entry is passed over, as std::fmax does.
     double worst = 0.0;
     for (int i = 0; i < 3; i++)
-        for (int j = 0; j < 3; j++)
-            worst = std::fmax(worst, std::fabs(g[i][j] - (i == j ? 1.0 : 0.0)));
+        for (int j = i; j < 3; j++) {
+            double g = a[0][i]*a[0][j] + a[1][i]*a[1][j] + a[2][i]*a[2][j];
+            double error = std::fabs(g - (i == j ? 1.0 : 0.0));
+            if (error > worst)
+                worst = error;
+        }
     return worst;
 }
 
 /**
- * Rodrigues' formula: U(x) = exp(W(x)) with W(x) v = x x v, the rotation by the angle |x| about
- * x/|x| (van Zon & Schofield (2007) eq. (3.24)). Written with sin(a)/a and (1 - cos a)/a^2 in
- * forms that stay accurate for small angles.
+ * Rodrigues' formula: U(x) = exp(W(x)) with W(x) v = x cross v, the rotation by the angle |x| about
+ * x/|x| (van Zon & Schofield (2007) eq. (3.24)); the core's rigidRotationMatrix().
  */
 inline Matrix3 rotationMatrix(const Vector3& x) {
-    double angle = norm(x);
-    double sinc, versine;  // sin(a)/a and (1 - cos(a))/a^2
-    if (angle < 1e-4) {
-        double a2 = angle*angle;
-        sinc = 1.0 - a2/6.0*(1.0 - a2/20.0);
-        versine = 0.5*(1.0 - a2/12.0*(1.0 - a2/30.0));
-    }
-    else {
-        double halfSin = std::sin(0.5*angle);
-        sinc = std::sin(angle)/angle;
-        versine = 2.0*halfSin*halfSin/(angle*angle);
-    }
-    Matrix3 r;
+    double r[3][3];
+    rigidRotationMatrix(x.data(), r);
+    Matrix3 result;
     for (int i = 0; i < 3; i++)
         for (int j = 0; j < 3; j++)
-            r[i][j] = (i == j ? 1.0 : 0.0) + versine*(x[i]*x[j] - (i == j ? angle*angle : 0.0));
-    // W(x) = [[0,-x3,x2],[x3,0,-x1],[-x2,x1,0]]
-    r[0][1] -= sinc*x[2]; r[1][0] += sinc*x[2];
-    r[0][2] += sinc*x[1]; r[2][0] -= sinc*x[1];
-    r[1][2] -= sinc*x[0]; r[2][1] += sinc*x[0];
-    return r;
+            result[i][j] = r[i][j];
+    return result;
 }
 
 } // namespace OpenMMRigid

@@ -2,40 +2,15 @@
 #define OPENMMRIGID_NUMERICS_NOSQUISH_H_
 
 /*
- * The NO_SQUISH free rotation of T. F. Miller III, M. Eleftheriou, P. Pattnaik, A. Ndirango,
- * D. Newns and G. J. Martyna, J. Chem. Phys. 116, 8649 (2002), Section II.B: the rotational kinetic
- * energy sum_k L_k^2 / (2 I_k) is split into its three terms, each of which is a uniform rotation
- * about one body axis, composed symmetrically as
- *   R_3(dt/2) R_2(dt/2) R_1(dt) R_2(dt/2) R_3(dt/2)   (their eq. (2.17) written with the body axes).
- * The composition is symplectic and time-reversible and second order in dt. Miller et al. write it
- * for a quaternion and its conjugate momentum; here the same rotations act on the attitude A (lab to
- * body) and the body-frame angular momentum: under the term L_k^2/(2 I_k) alone the body turns about
- * its axis k at the rate L_k/I_k, so both A and L_body are multiplied by the rotation U(-phi e_k),
- * phi = (L_k/I_k) dt, and L_lab = A^T L_body stays fixed.
- *
- * Exact up to rounding for the splitting it implements; its error against the true free motion is
- * O(dt^3) per step (benchmarks/rotation_accuracy.py measures it against FreeRotor).
+ * The NO_SQUISH free rotation of Miller et al., J. Chem. Phys. 116, 8649 (2002), on Vector3 and
+ * Matrix3: the core's rigidNoSquishRotate() (numerics/core/CoreNoSquish.h, which states the splitting
+ * and its accuracy) for the host code.
  */
 
 #include "numerics/Matrix3.h"
-#include <cmath>
+#include "numerics/RigidCore.h"
 
 namespace OpenMMRigid {
-
-/** Apply U(-angle e_axis) to A (on the left) and to the body-frame vector l. */
-inline void rotateAboutBodyAxis(int axis, double angle, Matrix3& attitude, Vector3& l) {
-    const int i = (axis + 1)%3, j = (axis + 2)%3;
-    const double c = std::cos(angle), s = std::sin(angle);
-    // U(-angle e_axis) maps (v_i, v_j) to (c v_i + s v_j, -s v_i + c v_j).
-    for (int col = 0; col < 3; col++) {
-        double ai = attitude[i][col], aj = attitude[j][col];
-        attitude[i][col] = c*ai + s*aj;
-        attitude[j][col] = -s*ai + c*aj;
-    }
-    double li = l[i], lj = l[j];
-    l[i] = c*li + s*lj;
-    l[j] = -s*li + c*lj;
-}
 
 /**
  * Advance a free rigid rotor by dt with the NO_SQUISH splitting.
@@ -47,13 +22,14 @@ inline void rotateAboutBodyAxis(int axis, double angle, Matrix3& attitude, Vecto
  * @param angularMomentum  the angular momentum in the body frame, advanced in place
  */
 inline void noSquishRotate(const Vector3& moments, double dt, Matrix3& attitude, Vector3& angularMomentum) {
-    static const int axes[5] = {2, 1, 0, 1, 2};
-    static const double fractions[5] = {0.5, 0.5, 1.0, 0.5, 0.5};
-    for (int step = 0; step < 5; step++) {
-        int k = axes[step];
-        if (moments[k] > 0.0)
-            rotateAboutBodyAxis(k, angularMomentum[k]/moments[k]*fractions[step]*dt, attitude, angularMomentum);
-    }
+    double a[3][3];
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            a[i][j] = attitude[i][j];
+    rigidNoSquishRotate(moments.data(), dt, a, angularMomentum.data());
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            attitude[i][j] = a[i][j];
 }
 
 } // namespace OpenMMRigid

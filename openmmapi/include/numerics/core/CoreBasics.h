@@ -1,0 +1,116 @@
+/*
+ * The numerics core, part 1: the few helpers every other core file uses (a clamp, 3 x 3 products,
+ * Rodrigues' rotation). Plain C on doubles, shared by every target: see numerics/RigidCore.h for the
+ * rules the core files follow and the prelude each target puts in front of them.
+ *
+ * Matrices are double[3][3], row-major: m[i][j] is row i, column j. Everything is exact up to the
+ * rounding of the few products and sums it performs.
+ */
+#ifndef OPENMMRIGID_CORE_BASICS_H_
+#define OPENMMRIGID_CORE_BASICS_H_
+
+/** The status every core function that can fail returns (0 is success). */
+enum RigidStatus {
+    RigidStatusOk = 0,
+    RigidStatusNegativeMoment = 1,       /* a moment of inertia is negative or not a number */
+    RigidStatusTwoZeroMoments = 2,       /* two moments are zero but not the third */
+    RigidStatusUnequalLinear = 3,        /* one moment is zero and the other two differ */
+    RigidStatusThetaOnSeparatrix = 4,    /* the theta series was requested at m = 1, where it does not exist */
+    RigidStatusThetaNotConverged = 5,    /* the theta series needs more terms than the core allows */
+    RigidStatusUnknownRepresentation = 6 /* a representation code that is not one of RigidRepresentation */
+};
+
+/** pi to double precision (the nearest double, as M_PI, which strict C99 does not define). */
+RIGID_FUNCTION double rigidPi(void) {
+    return 3.14159265358979323846;
+}
+
+/** The machine epsilon of double, 2^-52. */
+RIGID_FUNCTION double rigidEpsilon(void) {
+    return 0x1p-52;
+}
+
+/** x clamped to [low, high], as std::clamp does it (a NaN stays NaN). */
+RIGID_FUNCTION double rigidClamp(double x, double low, double high) {
+    return (x < low ? low : (high < x ? high : x));
+}
+
+/** max(0, x), as std::max(0.0, x) computes it (0 for a NaN, +0 for -0). */
+RIGID_FUNCTION double rigidPositivePart(double x) {
+    return (0.0 < x ? x : 0.0);
+}
+
+RIGID_FUNCTION double rigidMax3(double a, double b, double c) {
+    double ab = (a < b ? b : a);
+    return (ab < c ? c : ab);
+}
+
+RIGID_FUNCTION double rigidMax4(double a, double b, double c, double d) {
+    const double abc = rigidMax3(a, b, c);
+    return (abc < d ? d : abc);
+}
+
+/** c = a b (c must not alias a or b). */
+RIGID_FUNCTION void rigidMultiply(double a[3][3], double b[3][3], double c[3][3]) {
+    int i, j;
+    for (i = 0; i < 3; i++)
+        for (j = 0; j < 3; j++)
+            c[i][j] = a[i][0]*b[0][j] + a[i][1]*b[1][j] + a[i][2]*b[2][j];
+}
+
+/** c = a^T b (c must not alias a or b). */
+RIGID_FUNCTION void rigidMultiplyTransposed(double a[3][3], double b[3][3], double c[3][3]) {
+    int i, j;
+    for (i = 0; i < 3; i++)
+        for (j = 0; j < 3; j++)
+            c[i][j] = a[0][i]*b[0][j] + a[1][i]*b[1][j] + a[2][i]*b[2][j];
+}
+
+/** w = a v (w must not alias v). */
+RIGID_FUNCTION void rigidMultiplyVector(double a[3][3], const double* v, double* w) {
+    int i;
+    for (i = 0; i < 3; i++)
+        w[i] = a[i][0]*v[0] + a[i][1]*v[1] + a[i][2]*v[2];
+}
+
+/**
+ * |x| for a 3-vector without overflow or underflow: the largest |x_k| is factored out before the
+ * squares are summed (as libstdc++ computes the three-argument std::hypot).
+ */
+RIGID_FUNCTION double rigidNorm(const double* x) {
+    const double a = fabs(x[0]), b = fabs(x[1]), c = fabs(x[2]);
+    const double largest = rigidMax3(a, b, c);
+    if (largest == 0.0)
+        return 0.0;
+    return largest*sqrt((a/largest)*(a/largest) + (b/largest)*(b/largest) + (c/largest)*(c/largest));
+}
+
+/**
+ * Rodrigues' formula: U(x) = exp(W(x)) with W(x) v = x cross v, the rotation by the angle |x| about
+ * x/|x| (van Zon & Schofield (2007) eq. (3.24)). Written with sin(a)/a and (1 - cos a)/a^2 in forms
+ * that stay accurate for small angles.
+ */
+RIGID_FUNCTION void rigidRotationMatrix(const double* x, double r[3][3]) {
+    const double angle = rigidNorm(x);
+    double sinc, versine;  /* sin(a)/a and (1 - cos(a))/a^2 */
+    int i, j;
+    if (angle < 1e-4) {
+        const double a2 = angle*angle;
+        sinc = 1.0 - a2/6.0*(1.0 - a2/20.0);
+        versine = 0.5*(1.0 - a2/12.0*(1.0 - a2/30.0));
+    }
+    else {
+        const double halfSin = sin(0.5*angle);
+        sinc = sin(angle)/angle;
+        versine = 2.0*halfSin*halfSin/(angle*angle);
+    }
+    for (i = 0; i < 3; i++)
+        for (j = 0; j < 3; j++)
+            r[i][j] = (i == j ? 1.0 : 0.0) + versine*(x[i]*x[j] - (i == j ? angle*angle : 0.0));
+    /* W(x) = [[0,-x3,x2],[x3,0,-x1],[-x2,x1,0]] */
+    r[0][1] -= sinc*x[2]; r[1][0] += sinc*x[2];
+    r[0][2] += sinc*x[1]; r[2][0] -= sinc*x[1];
+    r[1][2] -= sinc*x[0]; r[2][1] += sinc*x[0];
+}
+
+#endif /* OPENMMRIGID_CORE_BASICS_H_ */

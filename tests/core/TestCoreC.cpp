@@ -1,0 +1,291 @@
+/* -------------------------------------------------------------------------- *
+ *                               OpenMM-Rigid                                 *
+ * -------------------------------------------------------------------------- *
+ * The numerics core compiled as C (CoreC.c, C99 behind core/CorePreludeC.h)  *
+ * against the same text compiled as C++ inside the validating API: FreeRotor *
+ * (evolve in every representation, and advance), rigidClassifyMoments,       *
+ * Special:: (Jacobi functions, RF, RJ, K), noSquishRotate, philox4x32 and    *
+ * NormalStream. Bodies of every kind and regime (generic, near and on the    *
+ * separatrix, steady rotation about each axis, tiny off-axis components,     *
+ * omega = 0, nearly symmetric, moments snapped by the classification,        *
+ * subnormal and huge omega), times of both signs up to many periods.         *
+ *                                                                            *
+ * The two compilations share every line of arithmetic and call the same     *
+ * libm, so agreement is required to the last bit.                            *
+ * -------------------------------------------------------------------------- */
+
+#include "CoreC.h"
+#include "numerics/Elliptic.h"
+#include "numerics/FreeRotor.h"
+#include "numerics/NoSquish.h"
+#include "numerics/Philox.h"
+#include "openmm/internal/AssertionUtilities.h"
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <cstring>
+#include <iostream>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+using namespace OpenMM;
+using namespace OpenMMRigid;
+
+static std::mt19937_64 rng(20261201);
+static int comparisons = 0;
+
+static double uniform(double low, double high) {
+    return std::uniform_real_distribution<double>(low, high)(rng);
+}
+
+static double normal() {
+    return std::normal_distribution<double>(0.0, 1.0)(rng);
+}
+
+static Matrix3 randomRotation() {
+    double a = normal(), b = normal(), c = normal(), d = normal();
+    double n = std::sqrt(a*a + b*b + c*c + d*d);
+    a /= n; b /= n; c /= n; d /= n;
+    return {{{a*a + b*b - c*c - d*d, 2*(b*c - a*d), 2*(b*d + a*c)},
+             {2*(b*c + a*d), a*a - b*b + c*c - d*d, 2*(c*d - a*b)},
+             {2*(b*d - a*c), 2*(c*d + a*b), a*a - b*b - c*c + d*d}}};
+}
+
+/** Fails unless a and b are the same double to the last bit (so -0 differs from +0, and NaN fails). */
+static void assertSameBits(double a, double b, const std::string& what, int line) {
+    comparisons++;
+    if (std::memcmp(&a, &b, sizeof(double)) != 0 || a != a) {
+        std::stringstream s;
+        s.precision(17);
+        s << what << ": C " << b << " vs C++ " << a;
+        throwException(__FILE__, line, s.str());
+    }
+}
+
+struct Body {
+    Vector3 moments, omega;
+    std::string name;
+};
+
+static std::string describe(const Body& body, double t) {
+    std::stringstream s;
+    s.precision(17);
+    s << body.name << ": moments (" << body.moments[0] << ", " << body.moments[1] << ", " << body.moments[2] << "), omega ("
+      << body.omega[0] << ", " << body.omega[1] << ", " << body.omega[2] << "), t = " << t;
+    return s.str();
+}
+
+/** Bodies in every regime of the rotor. */
+static std::vector<Body> bodies() {
+    std::vector<Body> list;
+    for (int n = 0; n < 40; n++) {
+        double a = uniform(0.5, 5), b = uniform(0.5, 5), c = uniform(0.5, 5);
+        Vector3 omega = {normal(), normal(), normal()};
+        int axis = n%3;
+        Vector3 linear = {a, a, a}, symmetric = {a, a, a};
+        linear[axis] = 0.0;
+        symmetric[axis] = b;
+        list.push_back({{a, b, c}, omega, "asymmetric " + std::to_string(n)});
+        list.push_back({{a, a, a}, omega, "spherical " + std::to_string(n)});
+        list.push_back({symmetric, omega, "symmetric " + std::to_string(n)});
+        list.push_back({linear, omega, "linear " + std::to_string(n)});
+    }
+    // On and near the separatrix: I = (1, 5, 9), omega = (3, w2, 1) has L^2 = 2E I2 exactly; offsets
+    // of the largest component put the motion just inside or outside it (m just below 1 on either
+    // ordering, where the automatic choice takes the elliptic integral).
+    for (double w2 : {0.5, 0.0, -2.0})
+        list.push_back({{1, 5, 9}, {3, w2, 1}, "separatrix"});
+    for (double offset : {1e-3, -1e-3, 1e-6, -1e-6, 1e-12, -1e-12})
+        list.push_back({{1, 5, 9}, {3, 0.5, 1 + offset}, "near separatrix"});
+    // Steady rotation about each principal axis, tiny off-axis components, omega = 0, turning points.
+    for (int axis = 0; axis < 3; axis++)
+        for (double small : {0.0, 1e-300, 1e-20, 1e-9}) {
+            Vector3 omega = {small, -small, 0.5*small};
+            omega[axis] = 1.7;
+            list.push_back({{1, 2, 3}, omega, "principal axis " + std::to_string(axis)});
+            list.push_back({{3, 1, 2}, omega, "principal axis (cyclic moments) " + std::to_string(axis)});
+        }
+    list.push_back({{1, 2, 3}, {0, 0, 0}, "omega = 0"});
+    list.push_back({{10, 20, 26}, {0.0, 15, 1}, "turning point"});
+    list.push_back({{10, 20, 26}, {1, 15, 1}, "paper Section 5"});
+    // Nearly symmetric (distinct: m ~ 1e-12) and within the classification's tolerance (snapped).
+    list.push_back({{10, 10*(1 + 1e-12), 26}, {0.3, -1.2, 0.8}, "nearly prolate"});
+    list.push_back({{10, 26*(1 - 1e-12), 26}, {0.3, -1.2, 0.8}, "nearly oblate"});
+    list.push_back({{10, 10*(1 + 2e-14), 26}, {0.3, -1.2, 0.8}, "snapped symmetric"});
+    list.push_back({{3, 3*(1 + 2e-14), 3*(1 - 2e-14)}, {0.3, -1.2, 0.8}, "snapped spherical"});
+    list.push_back({{1e-15, 2, 2*(1 + 1e-14)}, {0.3, -1.2, 0.8}, "snapped linear"});
+    // The ends of the internal frequency scaling.
+    list.push_back({{1, 2, 3}, {3e-310, -1e-309, 2e-310}, "subnormal omega"});
+    list.push_back({{1, 2, 3}, {1e307, -3e307, 2e306}, "huge omega"});
+    return list;
+}
+
+static void copyAttitude(const Matrix3& a, double* flat) {
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            flat[3*i + j] = a[i][j];
+}
+
+/** evolve() in each representation and advance(), the C core against FreeRotor. */
+void testRotor() {
+    for (const Body& body : bodies()) {
+        Matrix3 attitude = randomRotation();
+        double flat[9];
+        copyAttitude(attitude, flat);
+        double scale = std::max({std::fabs(body.omega[0]), std::fabs(body.omega[1]), std::fabs(body.omega[2]), 1e-300});
+        std::vector<double> times = {0.0, 0.03/scale, -0.7/scale, 5.0/scale, 123.0/scale};
+        for (int representation : {FreeRotor::Automatic, FreeRotor::ThetaSeries, FreeRotor::EllipticIntegral}) {
+            bool thrown = false;
+            std::vector<double> omegas(3*times.size()), attitudes(9*times.size());
+            double parameter;
+            int used;
+            int status = coreCEvolve(body.moments.data(), body.omega.data(), flat, representation, times.size(), times.data(),
+                                     omegas.data(), attitudes.data(), &parameter, &used);
+            try {
+                FreeRotor rotor(body.moments, body.omega, attitude, (FreeRotor::Representation) representation);
+                ASSERT_EQUAL(used, rotor.getRepresentation());
+                assertSameBits(rotor.getParameter(), parameter, "parameter of " + body.name, __LINE__);
+                for (size_t n = 0; n < times.size(); n++) {
+                    Vector3 omega;
+                    Matrix3 a;
+                    rotor.evolve(times[n], omega, a);
+                    std::string where = describe(body, times[n]) + ", representation " + std::to_string(representation);
+                    for (int i = 0; i < 3; i++) {
+                        assertSameBits(omega[i], omegas[3*n + i], "evolve omega, " + where, __LINE__);
+                        for (int j = 0; j < 3; j++)
+                            assertSameBits(a[i][j], attitudes[9*n + 3*i + j], "evolve A, " + where, __LINE__);
+                    }
+                }
+            }
+            catch (const std::invalid_argument&) {
+                thrown = true;
+            }
+            // The C status is an error exactly where the C++ API throws (the theta series on the separatrix).
+            ASSERT_EQUAL(thrown, status != RigidStatusOk);
+        }
+        for (double t : times) {
+            Vector3 omega = body.omega;
+            Matrix3 a = attitude;
+            FreeRotor::advance(body.moments, omega, a, t);
+            Vector3 omegaC = body.omega;
+            double flatC[9];
+            copyAttitude(attitude, flatC);
+            ASSERT_EQUAL(RigidStatusOk, coreCAdvance(body.moments.data(), omegaC.data(), flatC, t));
+            std::string where = describe(body, t);
+            for (int i = 0; i < 3; i++) {
+                assertSameBits(omega[i], omegaC[i], "advance omega, " + where, __LINE__);
+                for (int j = 0; j < 3; j++)
+                    assertSameBits(a[i][j], flatC[3*i + j], "advance A, " + where, __LINE__);
+            }
+        }
+    }
+}
+
+/** The classification: kinds, unique axes, snapped moments and error statuses, C against C++. */
+void testClassification() {
+    std::vector<Vector3> cases = {{1, 2, 3}, {2, 2, 2}, {2, 2, 3}, {3, 2, 2}, {2, 3, 2}, {0, 2, 2}, {2, 0, 2}, {2, 2, 0},
+                                  {0, 0, 0}, {0, 0, 1}, {0, 1, 2}, {-1, 2, 3}, {1, 2, NAN}, {1, 1 + 1e-12, 3},
+                                  {1, 1 + 5e-14, 3}, {1, 1 + 5e-14, 1 - 5e-14}, {1e-14, 1, 1}, {1e-12, 1, 1}};
+    for (const Vector3& moments : cases) {
+        RigidShape shape;
+        int status = rigidClassifyMoments(moments.data(), &shape);
+        int kind, uniqueAxis;
+        double classified[3];
+        ASSERT_EQUAL(status, coreCClassify(moments.data(), &kind, &uniqueAxis, classified));
+        if (status != RigidStatusOk)
+            continue;
+        ASSERT_EQUAL(shape.kind, kind);
+        ASSERT_EQUAL(shape.uniqueAxis, uniqueAxis);
+        for (int k = 0; k < 3; k++)
+            assertSameBits(shape.moments[k], classified[k], "classified moment", __LINE__);
+    }
+}
+
+/** The elliptic functions of the core, against Special:: (which checks its arguments, then calls the core). */
+void testSpecialFunctions() {
+    for (double m1 : {1.0, 0.9, 0.5, 0.1, 1e-3, 1e-10, 1e-20, 1e-33, 1e-100, 0.0}) {
+        double m = 1.0 - m1;
+        assertSameBits(Special::ellipticK(m, m1), coreCEllipticK(m1), "ellipticK", __LINE__);
+        for (double u : {0.0, 0.3, -2.5, 30.0, 123.456, -400.0}) {
+            double sn, cn, dn, snC, cnC, dnC;
+            Special::jacobiElliptic(u, m, m1, sn, cn, dn);
+            coreCJacobi(u, m, m1, &snC, &cnC, &dnC);
+            assertSameBits(sn, snC, "sn", __LINE__);
+            assertSameBits(cn, cnC, "cn", __LINE__);
+            assertSameBits(dn, dnC, "dn", __LINE__);
+        }
+    }
+    for (double x : {0.0, 1e-300, 0.5, 2.0, 1e300})
+        for (double y : {1e-10, 1.0, 7.0})
+            for (double z : {0.3, 1.0, 1e10}) {
+                assertSameBits(Special::carlsonRF(x, y, z), coreCCarlsonRF(x, y, z), "RF", __LINE__);
+                for (double p : {0.7, 1e-8, 1e8})
+                    assertSameBits(Special::carlsonRJ(x, y, z, p), coreCCarlsonRJ(x, y, z, p), "RJ", __LINE__);
+            }
+}
+
+/** NO_SQUISH, Philox and the normal deviates. */
+void testNoSquishAndRandomNumbers() {
+    for (const Vector3& moments : std::vector<Vector3>{{1, 2, 3}, {0, 2, 2}, {2, 2, 2}, {3, 1, 1}}) {
+        Matrix3 attitude = randomRotation();
+        Vector3 l = {normal(), normal(), normal()};
+        for (double dt : {0.002, -0.5, 3.0}) {
+            Matrix3 a = attitude;
+            Vector3 lCpp = l, lC = l;
+            double flat[9];
+            copyAttitude(attitude, flat);
+            noSquishRotate(moments, dt, a, lCpp);
+            coreCNoSquish(moments.data(), dt, flat, lC.data());
+            for (int i = 0; i < 3; i++) {
+                assertSameBits(lCpp[i], lC[i], "NO_SQUISH L", __LINE__);
+                for (int j = 0; j < 3; j++)
+                    assertSameBits(a[i][j], flat[3*i + j], "NO_SQUISH A", __LINE__);
+            }
+        }
+    }
+    for (uint64_t seed : {0ull, 12345ull, 0xFFFFFFFFFFFFFFFFull})
+        for (uint32_t stream : {0u, 7u, 0xFFFFFFFFu})
+            for (uint64_t step : {0ull, 99ull, 1ull << 40}) {
+                NormalStream s(seed, stream, step);
+                double normals[11], uniformC;
+                coreCNormals(seed, stream, step, 11, normals, &uniformC);
+                for (int k = 0; k < 11; k++)
+                    assertSameBits(s.next(), normals[k], "normal deviate", __LINE__);
+                assertSameBits(s.uniform(), uniformC, "uniform deviate", __LINE__);
+            }
+    std::array<uint32_t, 4> counter = {0x243f6a88, 0x85a308d3, 0x13198a2e, 0x03707344};
+    std::array<uint32_t, 2> key = {0xa4093822, 0x299f31d0};
+    std::array<uint32_t, 4> block = philox4x32(counter, key), blockC;
+    coreCPhilox(counter.data(), key.data(), blockC.data());
+    ASSERT(block == blockC);
+}
+
+/** The constants the core writes out are the values its comments derive them from. */
+void testCoreConstants() {
+    volatile double eps = std::numeric_limits<double>::epsilon();  // volatile: computed at run time, as the old code did
+    assertSameBits(std::pow(3.0*eps, -1.0/8.0), rigidRFStopFactor(), "RF stop factor", __LINE__);
+    assertSameBits(std::pow(0.25*eps, -1.0/6.0), rigidRJStopFactor(), "RJ stop factor", __LINE__);
+    assertSameBits(M_PI, rigidPi(), "pi", __LINE__);
+    assertSameBits(eps, rigidEpsilon(), "epsilon", __LINE__);
+    assertSameBits(FreeRotor::automaticThetaSeriesLimit, rigidAutomaticThetaSeriesLimit(), "theta-series limit", __LINE__);
+}
+
+int main() {
+    try {
+        testCoreConstants();
+        testClassification();
+        testRotor();
+        testSpecialFunctions();
+        testNoSquishAndRandomNumbers();
+        std::cout << comparisons << " values identical in C and C++" << std::endl;
+    }
+    catch (const std::exception& e) {
+        std::cout << "exception: " << e.what() << std::endl;
+        return 1;
+    }
+    std::cout << "Done" << std::endl;
+    return 0;
+}
