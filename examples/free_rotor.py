@@ -9,7 +9,7 @@ middle axis, which is unstable, so the motion is far from a small wobble about y
 The script
 1. prints omega and the attitude matrix A at t = 1 and t = 10 next to reference values from an
    independent DOP853 integration of Euler's equations and dA/dt = -W(omega) A (rtol 1e-14, trusted to
-   about 1e-11; shared/reference/free-rotor-notes.md), with the largest deviation;
+   about 1e-11; docs/free-rotor-notes.md), with the largest deviation;
 2. redraws the paper's Fig. 3: (a) the body-frame components of omega against t, (b) the x-z
    projection of the lab-frame positions r_lab = A^T r_body of the masses at (a,0,0), (0,b,0), (0,0,c),
    and writes it to examples/output/free_rotor_fig3.png.

@@ -38,6 +38,22 @@ if ! "$python" -c 'import os, sysconfig, sys; sys.exit(not os.path.exists(os.pat
     aptInstall python3-dev
 fi
 
+# The numerics core is also GPU kernel source: tests/core compiles it as OpenCL C with clang and runs
+# it on PoCL (OpenCL on the CPU), where these are installed. Installed here as root on Debian; elsewhere
+# those tests are left out (TestCoreC, the C99 build of the same text, always runs).
+if [[ $(id -u) -eq 0 ]] && command -v apt-get >/dev/null; then
+    missing=()
+    for package in clang pocl-opencl-icd ocl-icd-opencl-dev; do
+        dpkg -s "$package" >/dev/null 2>&1 || missing+=("$package")
+    done
+    if (( ${#missing[@]} )); then
+        aptInstall "${missing[@]}" || echo "warning: could not install ${missing[*]}; the OpenCL tests of the core are left out" >&2
+    fi
+fi
+# PoCL compiles kernels on first use: keep its cache in the build folder.
+export POCL_CACHE_DIR="$repo/build/pocl-cache"
+mkdir -p "$POCL_CACHE_DIR"
+
 "$python" -m pip install --upgrade pip
 # The build requirements too, so that the quick rebuild `pip install --no-build-isolation .` works.
 "$python" -m pip install scikit-build-core "swig>=4.2"

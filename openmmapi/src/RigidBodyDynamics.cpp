@@ -1,7 +1,6 @@
 #include "internal/RigidBodyDynamics.h"
-#include "numerics/FreeRotor.h"
-#include "numerics/NoSquish.h"
 #include "numerics/Philox.h"
+#include "numerics/RigidCore.h"
 #include "numerics/SymmetricEigen.h"
 #include "openmm/OpenMMException.h"
 #include <cmath>
@@ -87,7 +86,7 @@ void RigidBodyDynamics::setGeometry(const StepGeometry& newGeometry) {
 }
 
 Vector3 RigidBodyDynamics::bodyAngularVelocity(int b, const Vector3& bodyAngularMomentum) const {
-    const Vector3& moments = system.getMoments(b);
+    const double* moments = system.getMoments(b);
     Vector3 omega;
     for (int k = 0; k < 3; k++)
         omega[k] = (moments[k] > 0.0 ? bodyAngularMomentum[k]/moments[k] : 0.0);
@@ -116,7 +115,7 @@ void RigidBodyDynamics::fitBody(int b, vector<Vec3>& positions, vector<Vec3>& ve
         for (int k = 0; k < 3; k++)
             centred[i][k] = whole[i][k] - center[k];
     Matrix3 rotation = identityMatrix();  // body to lab
-    if (system.getKind(b) != PointBody) {
+    if (system.getKind(b) != RigidKindPoint) {
         vector<Vector3> shape(system.getBodyCoordinates(b), system.getBodyCoordinates(b) + n);
         vector<double> weights(n);
         for (int i = 0; i < n; i++)
@@ -177,20 +176,28 @@ void RigidBodyDynamics::projectVelocities(vector<Vec3>& velocities) {
 
 void RigidBodyDynamics::rotate(int b, double dt, RigidBodyOptions::RotationMethod method) {
     BodyState& state = states[b];
-    const RigidBodyKind kind = system.getKind(b);
-    if (kind == PointBody)
+    const RigidShape& shape = system.getShape(b);
+    if (shape.kind == RigidKindPoint)
         return;
     Vector3 bodyMomentum = multiply(state.attitude, state.angularMomentum);
+    double attitude[3][3];
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            attitude[i][j] = state.attitude[i][j];
     // A linear body's free motion is a uniform rotation about L, which both methods take exactly:
     // NO_SQUISH's turns about the perpendicular axes would move part of L onto the molecular axis,
     // where the body can carry none.
-    if (method == RigidBodyOptions::NoSquish && kind != LinearBody)
-        noSquishRotate(system.getMoments(b), dt, state.attitude, bodyMomentum);
+    if (method == RigidBodyOptions::NoSquish && shape.kind != RigidKindLinear)
+        rigidNoSquishRotate(shape.moments, dt, attitude, bodyMomentum.data());
     else {
-        // The attitude is kept orthonormal here and the momenta were checked finite in kickAndDrift().
+        // The exact rotation (numerics core). Its contract holds: the shape is classified, the
+        // attitude is kept orthonormal here and the momenta were checked finite in kickAndDrift().
         Vector3 omega = bodyAngularVelocity(b, bodyMomentum);
-        FreeRotor::advance(system.getMoments(b), omega, state.attitude, dt, false);
+        rigidRotorAdvance(&shape, omega.data(), attitude, dt);
     }
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            state.attitude[i][j] = attitude[i][j];
     reorthonormalize(state.attitude);
 }
 
@@ -317,8 +324,8 @@ void RigidBodyDynamics::thermalize(vector<Vec3>& positions, vector<Vec3>& veloci
         Vector3 xi;
         for (int k = 0; k < 3; k++)
             xi[k] = normal.next();
-        if (system.getKind(b) != PointBody) {
-            const Vector3& moments = system.getMoments(b);
+        if (system.getKind(b) != RigidKindPoint) {
+            const double* moments = system.getMoments(b);
             Vector3 bodyMomentum = multiply(state.attitude, state.angularMomentum), bodyXi = multiply(state.attitude, xi);
             for (int k = 0; k < 3; k++)
                 bodyMomentum[k] = c*bodyMomentum[k] + noise*sqrt(moments[k])*bodyXi[k];

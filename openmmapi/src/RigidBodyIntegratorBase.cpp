@@ -87,8 +87,8 @@ string RigidBodyIntegratorBase::getBodyKind(int index) const {
 }
 
 vector<double> RigidBodyIntegratorBase::getBodyMoments(int index) const {
-    const Vector3& moments = getShapedBody(index).getMoments(index);
-    return vector<double>(moments.begin(), moments.end());
+    const double* moments = getShapedBody(index).getMoments(index);
+    return vector<double>(moments, moments + 3);
 }
 
 int RigidBodyIntegratorBase::getNumDegreesOfFreedom() const {

@@ -17,9 +17,14 @@ using namespace std;
 
 namespace OpenMMRigid {
 
-const char* rigidBodyKindName(RigidBodyKind kind) {
-    static const char* names[] = {"point", "linear", "spherical", "symmetric", "asymmetric"};
-    return names[kind];
+const char* rigidBodyKindName(int kind) {
+    switch (kind) {
+        case RigidKindPoint: return "point";
+        case RigidKindLinear: return "linear";
+        case RigidKindSpherical: return "spherical";
+        case RigidKindSymmetric: return "symmetric";
+        default: return "asymmetric";
+    }
 }
 
 StepGeometry::StepGeometry() : displacementLimit(numeric_limits<double>::infinity()) {
@@ -33,44 +38,37 @@ void RigidBodySystem::setShape(int b, const vector<Vector3>& centred) {
     for (int i = 0; i < n; i++)
         bodyMasses[i] = masses[members[i]];
     Matrix3 axes;
-    Vector3& moment = moments[b];
+    Vector3 moment;
     principalAxes(centred, bodyMasses, moment, axes);
     for (int i = 0; i < n; i++)
         coordinates[i] = multiplyTransposed(axes, centred[i]);
-    // The smallest moment of a linear molecule computed from coordinates is rounding noise, not zero:
-    // snap it, so that the body gets the exact linear-rotor flow with two rotational degrees of freedom.
-    const double largest = moment[2];
-    if (n == 1 || largest == 0.0) {
-        kinds[b] = PointBody;
-        moment = {0.0, 0.0, 0.0};
+    // The moments the dynamics uses are those of the stored coordinates themselves (the diagonal of
+    // their inertia tensor), so that the shape and the rotor agree to rounding; the one classification
+    // of the numerics core (rigidClassifyMoments) then gives the kind and makes the moments it finds
+    // equal (or zero) exactly so.
+    RigidShape& shape = shapes[b];
+    if (n == 1 || moment[2] == 0.0) {
         for (int i = 0; i < n; i++)
             coordinates[i] = {0.0, 0.0, 0.0};
-    }
-    else if (moment[0] <= 1e-10*largest) {
-        kinds[b] = LinearBody;
-        double perpendicular = 0.0;
-        for (int i = 0; i < n; i++) {
-            coordinates[i][1] = coordinates[i][2] = 0.0;
-            perpendicular += bodyMasses[i]*coordinates[i][0]*coordinates[i][0];
-        }
-        moment = {0.0, perpendicular, perpendicular};
+        moment = {0.0, 0.0, 0.0};
     }
     else {
-        // The moments the dynamics uses are those of the stored coordinates themselves (the diagonal of
-        // their inertia tensor), so that the shape and the rotor agree to rounding.
+        // The smallest principal moment of a linear molecule computed from coordinates is rounding
+        // noise: if the classification takes it for zero, the molecule is put on its axis exactly.
+        RigidShape principal;
+        if (rigidClassifyMoments(moment.data(), &principal) == RigidStatusOk && principal.kind == RigidKindLinear)
+            for (int i = 0; i < n; i++)
+                coordinates[i][1] = coordinates[i][2] = 0.0;
         for (int k = 0; k < 3; k++) {
             double sum = 0.0;
             for (int i = 0; i < n; i++)
                 sum += bodyMasses[i]*(dot(coordinates[i], coordinates[i]) - coordinates[i][k]*coordinates[i][k]);
             moment[k] = sum;
         }
-        // The reported kind treats moments within 1e-10 relative as equal: coordinates a few nm from the
-        // origin carry rounding of about 1e-14 relative into the moments of a truly symmetric shape.
-        // The dynamics is unaffected: FreeRotor takes the exact formula for the moments as they are.
-        const double tolerance = 1e-10*largest;
-        bool equal01 = moment[1] - moment[0] <= tolerance, equal12 = moment[2] - moment[1] <= tolerance;
-        kinds[b] = (equal01 && equal12 ? SphericalBody : (equal01 || equal12 ? SymmetricBody : AsymmetricBody));
     }
+    if (rigidClassifyMoments(moment.data(), &shape) != RigidStatusOk)
+        throw OpenMMException(className + ": body " + to_string(b) + " has principal moments " + to_string(moment[0]) + ", " +
+                to_string(moment[1]) + ", " + to_string(moment[2]) + ", which no rigid body has");
     shapeKnown[b] = 1;
 }
 
@@ -192,8 +190,8 @@ void RigidBodySystem::addBody(const vector<int>& members) {
     bodyStart.push_back(particles.size());
     bodyCoordinates.resize(particles.size(), Vector3{0.0, 0.0, 0.0});
     bodyMass.push_back(0.0);
-    moments.push_back({0.0, 0.0, 0.0});
-    kinds.push_back(PointBody);
+    RigidShape point = {RigidKindPoint, -1, {0.0, 0.0, 0.0}};
+    shapes.push_back(point);
     shapeKnown.push_back(0);
     handednessOpen.push_back(0);
 }
@@ -392,15 +390,15 @@ void RigidBodySystem::shapeFromDistances(int b, const vector<double>& pairDistan
     setShape(b, centred);
     // Distances do not tell a three-dimensional shape from its mirror image; the first fit to
     // positions does. Planar and linear shapes are their own mirror images up to a rotation.
-    const Vector3& moment = moments[b];
+    const double* moment = getMoments(b);
     double planarity = fabs(moment[2] - moment[1] - moment[0]);
-    handednessOpen[b] = (kinds[b] != PointBody && kinds[b] != LinearBody && planarity > 1e-10*moment[2]);
+    handednessOpen[b] = (getKind(b) != RigidKindPoint && getKind(b) != RigidKindLinear && planarity > 1e-10*moment[2]);
 }
 
 int RigidBodySystem::getNumDegreesOfFreedom() const {
     int dof = 3*freeParticles.size() - numFreeConstraints;
-    for (RigidBodyKind kind : kinds)
-        dof += 3 + (kind == PointBody ? 0 : kind == LinearBody ? 2 : 3);
+    for (const RigidShape& shape : shapes)
+        dof += 3 + (shape.kind == RigidKindPoint ? 0 : shape.kind == RigidKindLinear ? 2 : 3);
     if (removesCenterOfMassMotion)
         dof -= 3;
     return dof;

@@ -1,7 +1,7 @@
 """The example of van Zon & Schofield (2007) Section 5: I = (10, 20, 26), omega(0) = (1, 15, 1),
 A(0) = identity.
 
-PAPER_VALUES: from /work/shared/reference/free-rotor-notes.md (a DOP853 integration at rtol 1e-14,
+PAPER_VALUES: from docs/free-rotor-notes.md (a DOP853 integration at rtol 1e-14,
 14 decimals; trusted to about 1e-11).
 PRECISE_VALUES: Euler's equations and dA/dt = -W(omega) A integrated with mpmath.odefun (Taylor
 series) at 30 digits, printed to 20 digits; omega also agrees with the 40-digit closed form

@@ -3,6 +3,7 @@
 
 #include "internal/windowsExportRigid.h"
 #include "numerics/Matrix3.h"
+#include "numerics/RigidCore.h"
 #include "openmm/System.h"
 #include "openmm/Vec3.h"
 #include <memory>
@@ -11,22 +12,8 @@
 
 namespace OpenMMRigid {
 
-/** The kind of a rigid body, by its principal moments: what its rotation is, and how many degrees of freedom it has. */
-enum RigidBodyKind {
-    /** One particle, or all at one point: translation only. */
-    PointBody = 0,
-    /** A line of particles: two rotational degrees of freedom (the smallest moment is zero). */
-    LinearBody = 1,
-    /** Three equal moments. */
-    SphericalBody = 2,
-    /** Two equal moments. */
-    SymmetricBody = 3,
-    /** Three different moments. */
-    AsymmetricBody = 4
-};
-
-/** "point", "linear", "spherical", "symmetric" or "asymmetric". */
-OPENMM_EXPORT_RIGID const char* rigidBodyKindName(RigidBodyKind kind);
+/** The name of a body's kind (a RigidKind of the numerics core): "point", "linear", "spherical", "symmetric" or "asymmetric". */
+OPENMM_EXPORT_RIGID const char* rigidBodyKindName(int kind);
 
 /**
  * The periodic box and the largest plausible drift at one moment: what a fit needs to assemble a body
@@ -106,12 +93,20 @@ public:
     double getBodyMass(int b) const {
         return bodyMass[b];
     }
-    /** The principal moments of inertia of body b, ascending, in amu nm^2 (zero for a point, the first zero for a line). */
-    const Vector3& getMoments(int b) const {
-        return moments[b];
+    /**
+     * The principal moments of inertia of body b, ascending, in amu nm^2 (zero for a point, the first
+     * zero for a line), as the dynamics uses them: those rigidClassifyMoments() found equal are equal.
+     */
+    const double* getMoments(int b) const {
+        return shapes[b].moments;
     }
-    RigidBodyKind getKind(int b) const {
-        return kinds[b];
+    /** Body b's kind (a RigidKind). */
+    int getKind(int b) const {
+        return shapes[b].kind;
+    }
+    /** Body b's moments with their kind, as the rotor of the numerics core takes them. */
+    const RigidShape& getShape(int b) const {
+        return shapes[b];
     }
     /** Whether body b has its shape (coordinates, moments, kind). */
     bool isShapeKnown(int b) const {
@@ -197,8 +192,7 @@ private:
     std::vector<int> bodyStart, particles;
     std::vector<Vector3> bodyCoordinates;
     std::vector<double> bodyMass;
-    std::vector<Vector3> moments;
-    std::vector<RigidBodyKind> kinds;
+    std::vector<RigidShape> shapes;
     std::vector<char> shapeKnown, handednessOpen;
     std::vector<std::vector<InternalConstraint> > internalConstraints;
     std::vector<int> freeParticles, bodyOfParticle;
