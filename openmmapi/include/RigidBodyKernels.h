@@ -32,8 +32,18 @@ public:
      * kept alive by it for the kernel's lifetime).
      */
     virtual void initialize(OpenMM::ContextImpl& context, RigidBodySystem& bodies) = 0;
-    /** The periodic box and the largest plausible drift, before a step or a projection. */
+    /** The periodic box and the largest plausible drift, before a projection. */
     virtual void setGeometry(OpenMM::ContextImpl& context, const StepGeometry& geometry) = 0;
+    /**
+     * Before the first stage of a step: setGeometry(), and remember the positions and velocities
+     * the step starts from, for abandonStep().
+     */
+    virtual void beginStep(OpenMM::ContextImpl& context, const StepGeometry& geometry) = 0;
+    /**
+     * After a stage failed (an unstable simulation): put back the positions and velocities the step
+     * started from, so that the Context holds the last good state.
+     */
+    virtual void abandonStep(OpenMM::ContextImpl& context) = 0;
     /**
      * Re-fit the bodies to the context's positions, project its velocities onto rigid motion, and
      * place the virtual sites. Every body has its shape. Called when positions changed from outside

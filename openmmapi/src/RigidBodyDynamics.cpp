@@ -286,19 +286,30 @@ void RigidBodyDynamics::kickAndDrift(vector<Vec3>& positions, vector<Vec3>& velo
         positions[p] += velocities[p]*drift;
     if (constraints) {
         constraints->apply(previousPositions, positions, inverseMasses, constraintTolerance);
-        for (int p : free)
-            velocities[p] = (positions[p] - previousPositions[p])/drift;
+        // The solver reports no failure: where the constraints cannot be met from the drift (a bond
+        // turned by about 90 degrees in one step, where its iteration divides by zero) it leaves
+        // non-finite or far-flung positions, which the next force evaluation must not see.
+        for (int p : free) {
+            const Vec3 moved = positions[p] - previousPositions[p];
+            checkDisplacement("particle", p, sqrt(moved.dot(moved)), drift);
+            velocities[p] = moved/drift;
+        }
     }
 }
 
 void RigidBodyDynamics::checkDisplacement(const char* what, int index, double distance, double drift) const {
-    // Not "distance > limit": a NaN distance must stop the step too.
-    if (distance <= geometry.displacementLimit)
+    // Not "distance > limit": a NaN distance must stop the step too, and so must an infinite one
+    // where there is no limit.
+    if (distance <= geometry.displacementLimit && isfinite(distance))
         return;
     stringstream text;
-    text << system.getClassName() << ": " << what << " " << index << " would move " << distance << " nm in one drift of " <<
-            fabs(drift) << " ps, more than " << geometry.displacementLimitName << " (" << geometry.displacementLimit <<
-            " nm); the simulation is unstable (try a smaller step size, or minimize the energy first)";
+    text << system.getClassName() << ": " << what << " " << index;
+    if (isfinite(distance))
+        text << " would move " << distance << " nm in one drift of " << fabs(drift) << " ps, more than " <<
+                geometry.displacementLimitName << " (" << geometry.displacementLimit << " nm)";
+    else
+        text << " would move to a non-finite position in one drift of " << fabs(drift) << " ps";
+    text << "; the simulation is unstable (try a smaller step size, or minimize the energy first)";
     throw OpenMMException(text.str());
 }
 

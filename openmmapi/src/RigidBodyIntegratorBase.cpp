@@ -306,7 +306,9 @@ void RigidBodyIntegratorBase::step(int steps) {
             executeStep(*context);
         }
         catch (...) {
-            // The step stopped part way (an unstable simulation): rebuild everything from the Context.
+            // The step stopped part way (an unstable simulation): the Context goes back to the state
+            // the step started from, and everything is rebuilt from it.
+            stepKernel.abandonStep(*context);
             needsProjection = true;
             forcesAreValid = false;
             throw;

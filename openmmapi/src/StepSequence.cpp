@@ -55,7 +55,7 @@ void stepRigidBodyIntegrator(ContextImpl& context, IntegrateRigidBodyStepKernel&
     const SplittingScheme& scheme = splittingScheme(integrator.getSplitting());
     const double dt = integrator.getStepSize(), tolerance = integrator.getConstraintTolerance();
     const RigidBodyOptions::RotationMethod method = integrator.getRotationMethod();
-    kernel.setGeometry(context, currentGeometry(context, bodies));
+    kernel.beginStep(context, currentGeometry(context, bodies));
     // kick(a_0 dt) drift(b_0 dt) ... drift(b_{s-1} dt) kick(a_s dt): the first kick uses the forces
     // the Context holds, and every drift is followed by a force evaluation.
     for (int stage = 0; stage < scheme.numDrifts; stage++) {
@@ -84,7 +84,7 @@ void stepRigidBodyLangevinIntegrator(ContextImpl& context, IntegrateRigidBodySte
     const double dt = integrator.getStepSize(), tolerance = integrator.getConstraintTolerance();
     const double friction = integrator.getFriction();
     const RigidBodyOptions::RotationMethod method = integrator.getRotationMethod();
-    kernel.setGeometry(context, currentGeometry(context, bodies));
+    kernel.beginStep(context, currentGeometry(context, bodies));
     // LFMiddle (Z. Zhang, X. Liu, K. Yan, M. E. Tuckerman and J. Liu, J. Phys. Chem. A 123, 6056
     // (2019)), as LangevinMiddleIntegrator: B(dt) A(dt/2) O A(dt/2), force. It is BAOAB (Leimkuhler
     // and Matthews, Appl. Math. Res. Express 2013, 34) with the closing half kick of one step joined

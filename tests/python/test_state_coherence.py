@@ -313,11 +313,68 @@ def test_blow_up_raises_at_that_step(water, integratorClass, platformName):
     system, positions = two_close_waters(water, 0.02)
     integrator = rigid_integrator(integratorClass=integratorClass)
     context = started(system, integrator, platformName, positions)
+    before = positions_of(context), velocities_of(context)
     with pytest.raises(openmm.OpenMMException) as error:
         integrator.step(1)
         pytest.fail(f"step(1) did not raise; positions reached {np.abs(positions_of(context)).max():.3g} nm")
     message = str(error.value)
     assert "unstable" in message and integratorClass.__name__ in message, message
+    # The Context is back at the state the step started from.
+    assert np.array_equal(positions_of(context), before[0]) and np.array_equal(velocities_of(context), before[1])
+
+
+def constrained_pair_turned_square(integratorClass, platformName):
+    """Two free particles 0.1 nm apart along x, held by a constraint, in a periodic 3 nm box with a
+    1 nm cutoff, and a body (one water) elsewhere. The second particle's velocity takes it, in the
+    first drift of a 2 fs step (the whole step for Verlet, half of it for Langevin), to 0.2 nm from
+    the first along y: the constrained direction is perpendicular to the old one, where the
+    iteration of the constraint solver (SHAKE, CCMA) divides by zero. The displacement before the
+    constraints is 0.22 nm, well inside the cutoff."""
+    system = openmm.System()
+    edge = 3.0
+    system.setDefaultPeriodicBoxVectors(openmm.Vec3(edge, 0, 0), openmm.Vec3(0, edge, 0), openmm.Vec3(0, 0, edge))
+    for mass in (12.0, 12.0, 16.0, 1.0, 1.0):
+        system.addParticle(mass)
+    system.addConstraint(0, 1, 0.1)
+    for i, j, distance in ((2, 3, 0.09572), (2, 4, 0.09572), (3, 4, 0.15139)):
+        system.addConstraint(i, j, distance)
+    nonbonded = openmm.NonbondedForce()
+    nonbonded.setNonbondedMethod(openmm.NonbondedForce.CutoffPeriodic)
+    nonbonded.setCutoffDistance(1.0)
+    for _ in range(system.getNumParticles()):
+        nonbonded.addParticle(0.0, 0.3, 0.0)
+    system.addForce(nonbonded)
+    half = np.sqrt(0.09572**2 - (0.15139 / 2)**2)
+    positions = np.array([[1.0, 1.0, 1.0], [1.1, 1.0, 1.0], [2.0, 2.0, 2.0],
+                          [2.0 + 0.15139 / 2, 2.0 + half, 2.0], [2.0 - 0.15139 / 2, 2.0 + half, 2.0]])
+    velocities = np.zeros_like(positions)
+    firstDrift = 0.002 if integratorClass is RigidBodyIntegrator else 0.001
+    velocities[1] = [-0.1 / firstDrift, 0.2 / firstDrift, 0.0]
+    integrator = rigid_integrator(integratorClass=integratorClass)
+    context = make_context(system, integrator, platformName)
+    context.setPositions(positions)
+    context.setVelocities(velocities)
+    return context, integrator
+
+
+@pytest.mark.parametrize("platformName", PLATFORMS)
+@pytest.mark.parametrize("integratorClass", [RigidBodyIntegrator, RigidBodyLangevinIntegrator])
+def test_constraint_solver_blow_up_raises_at_that_step(integratorClass, platformName):
+    """Where the constraints among free particles cannot be satisfied from a drift (the solver
+    divides by zero and returns non-finite or far-flung positions, without an error of its own), the
+    step stops with the "unstable" error, and the Context keeps finite positions and stays usable:
+    before the check, the positions became NaN and the next force evaluation on the CPU platform
+    could crash the process (seen with HMR at 8 fs)."""
+    context, integrator = constrained_pair_turned_square(integratorClass, platformName)
+    before = positions_of(context), velocities_of(context)
+    with pytest.raises(openmm.OpenMMException) as error:
+        integrator.step(1)
+        pytest.fail(f"step(1) did not raise; positions reached {np.abs(positions_of(context)).max():.3g} nm")
+    message = str(error.value)
+    assert "unstable" in message and integratorClass.__name__ in message and "non-finite" in message, message
+    assert "particle 0" in message or "particle 1" in message, message
+    # The Context is back at the state the step started from.
+    assert np.array_equal(positions_of(context), before[0]) and np.array_equal(velocities_of(context), before[1])
 
 
 @pytest.mark.parametrize("platformName", PLATFORMS)

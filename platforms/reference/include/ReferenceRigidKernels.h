@@ -22,6 +22,8 @@ public:
     ~ReferenceIntegrateRigidBodyStepKernel();
     void initialize(OpenMM::ContextImpl& context, RigidBodySystem& bodies);
     void setGeometry(OpenMM::ContextImpl& context, const StepGeometry& geometry);
+    void beginStep(OpenMM::ContextImpl& context, const StepGeometry& geometry);
+    void abandonStep(OpenMM::ContextImpl& context);
     void project(OpenMM::ContextImpl& context);
     void projectVelocities(OpenMM::ContextImpl& context);
     bool positionsAreCurrent(OpenMM::ContextImpl& context) const;
@@ -37,8 +39,10 @@ private:
     std::unique_ptr<HostThreads> threads;
     std::unique_ptr<HostConstraints> constraints;
     std::unique_ptr<RigidBodyDynamics> dynamics;
-    /** The positions as this kernel last wrote them (see positionsAreCurrent()). */
+    /** The positions as this kernel last wrote them (see positionsAreCurrent()): at a step's start, those it starts from. */
     std::vector<OpenMM::Vec3> writtenPositions;
+    /** The velocities a step starts from (for abandonStep()). */
+    std::vector<OpenMM::Vec3> startVelocities;
 };
 
 } // namespace OpenMMRigid

@@ -83,6 +83,18 @@ void ReferenceIntegrateRigidBodyStepKernel::setGeometry(ContextImpl& context, co
     dynamics->setGeometry(geometry);
 }
 
+void ReferenceIntegrateRigidBodyStepKernel::beginStep(ContextImpl& context, const StepGeometry& geometry) {
+    dynamics->setGeometry(geometry);
+    // The step sequence proved the positions current (positionsAreCurrent()): writtenPositions holds them.
+    startVelocities = extractVelocities(context);
+}
+
+void ReferenceIntegrateRigidBodyStepKernel::abandonStep(ContextImpl& context) {
+    extractPositions(context) = writtenPositions;
+    extractVelocities(context) = startVelocities;
+    context.computeVirtualSites();
+}
+
 void ReferenceIntegrateRigidBodyStepKernel::project(ContextImpl& context) {
     dynamics->project(extractPositions(context), extractVelocities(context));
     context.computeVirtualSites();
