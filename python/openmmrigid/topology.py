@@ -16,8 +16,10 @@ __all__ = ["rigidBodiesFromTopology"]
 
 def _describeResidue(residue):
     """'LIG 12 (index 11, chain A)': the name, PDB id and index by which a user finds a residue."""
-    chain = residue.chain.id if residue.chain is not None else "?"
-    return f"{residue.name} {residue.id} (residue index {residue.index}, chain {chain})"
+    if residue.chain is None:
+        return f"{residue.name} {residue.id} (residue index {residue.index})"
+    chain = f"chain {residue.chain.id}" if residue.chain.id.strip() else f"chain index {residue.chain.index}"
+    return f"{residue.name} {residue.id} (residue index {residue.index}, {chain})"
 
 
 def _describeAtom(atom):
