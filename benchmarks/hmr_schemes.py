@@ -4,8 +4,8 @@
 The system: the villin headpiece (HP35 N68H, 35 residues, 582 atoms, one Cl-) in 2761 TIP3P waters,
 8867 atoms in a 4.92 x 4.60 x 3.89 nm box: openmm's own test structure (openmm/app/data/test.pdb).
 Amber14 (amber14-all.xml + amber14/tip3p.xml), PME with a 0.9 nm cutoff and Ewald error tolerance
-5e-4, constraints=HBonds, rigidWater=True, hydrogenMass 3 amu (--hydrogen-mass; taken from the
-bonded heavy atom, water untouched). RigidBodyIntegrator makes every water a rigid body and moves
+5e-4, constraints=HBonds (--constraints), rigidWater=True, hydrogenMass 3 amu (--hydrogen-mass; taken
+from the bonded heavy atom, water untouched). RigidBodyIntegrator makes every water a rigid body and moves
 the protein's atoms (and the ion) as free particles with their bonds to hydrogen constrained.
 
 After minimization and --equilibrate ps of LangevinMiddleIntegrator at 300 K (4 fs, 1/ps), every
@@ -60,6 +60,8 @@ def parseArguments():
     parser.add_argument("--pdb", default=os.path.join(os.path.dirname(app.__file__), "data", "test.pdb"),
                         help="solvated protein (default: openmm/app/data/test.pdb, villin in TIP3P)")
     parser.add_argument("--hydrogen-mass", type=float, default=3.0, help="amu (default 3)")
+    parser.add_argument("--constraints", choices=["HBonds", "AllBonds", "HAngles"], default="HBonds",
+                        help="the protein's constraints (default HBonds)")
     parser.add_argument("--steps", type=float, nargs="+", default=[4, 6, 8], help="rigid-body steps in fs (default 4 6 8)")
     parser.add_argument("--stock-steps", type=float, nargs="+", default=[4], help="stock VerletIntegrator steps in fs (default 4)")
     parser.add_argument("--time", type=float, default=10.0, help="NVE ps per run (default 10)")
@@ -80,7 +82,7 @@ def buildSystem(args):
     pdb = app.PDBFile(args.pdb)
     forceField = app.ForceField("amber14-all.xml", "amber14/tip3p.xml")
     system = forceField.createSystem(pdb.topology, nonbondedMethod=app.PME, nonbondedCutoff=0.9*unit.nanometer,
-                                     ewaldErrorTolerance=5e-4, constraints=app.HBonds, rigidWater=True,
+                                     ewaldErrorTolerance=5e-4, constraints=getattr(app, args.constraints), rigidWater=True,
                                      hydrogenMass=args.hydrogen_mass*unit.amu)
     return pdb, system
 
@@ -212,7 +214,7 @@ def main():
     dof = degreesOfFreedom(system)
     waters = sum(1 for residue in pdb.topology.residues() if residue.name == "HOH")
     say(f"system:    {os.path.basename(args.pdb)}: {system.getNumParticles()} atoms, {waters} waters, "
-        f"hydrogen mass {args.hydrogen_mass:g} amu, {system.getNumConstraints()} constraints, {dof} degrees of freedom")
+        f"hydrogen mass {args.hydrogen_mass:g} amu, constraints={args.constraints} ({system.getNumConstraints()} constraints), {dof} degrees of freedom")
     stamp(f"minimizing, then {args.equilibrate:g} ps of LangevinMiddleIntegrator at 4 fs")
     state = equilibrate(pdb, system, platform, args)
     runs = makeRuns(system, state, platform, args)
