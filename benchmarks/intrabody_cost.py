@@ -12,7 +12,7 @@ openmmrigid.rigidBodiesFromTopology) with its System as built by ForceField.crea
                  molecule.
     villin       openmm's solvated villin headpiece (openmm/app/data/test.pdb, 8867 atoms, amber14 +
                  TIP3P, PME, constraints=HBonds, rigid water): bodies are the 2761 waters and the
-                 ring of each aromatic side chain (PHE, TYR, TRP, HIE: from CG out, with its
+                 ring of each aromatic side chain (PHE, TYR, TRP, HIS: from CG out, with its
                  hydrogens), the rest flexible. The water's own terms were exclusions already, so
                  this is the saving for a typical solvated protein with a few rigid groups.
 
@@ -27,7 +27,8 @@ body's total force (relative to the largest per-atom force).
     python benchmarks/intrabody_cost.py                  # both systems: about 4 minutes on 2 busy cores
     python benchmarks/intrabody_cost.py --systems dipeptides --nonbonded CutoffPeriodic
 
-Writes benchmarks/results/intrabody_cost.csv and intrabody_cost.log (a copy of what is printed).
+Writes benchmarks/results/intrabody_cost.csv and intrabody_cost.log (a copy of what is printed; --output
+changes the path).
 """
 
 import argparse
@@ -80,7 +81,7 @@ END
 RINGS = {"PHE": "CG|CD[12]|CE[12]|CZ|HD[12]|HE[12]|HZ",
          "TYR": "CG|CD[12]|CE[12]|CZ|OH|HD[12]|HE[12]",
          "TRP": "CG|CD[12]|NE1|CE[23]|CZ[23]|CH2|HD1|HE[13]|HZ[23]|HH2",
-         "HIE": "CG|ND1|CD2|CE1|NE2|HD2|HE[12]"}
+         "HIS": "CG|ND1|CD2|CE1|NE2|HD[12]|HE[12]"}  # openmm.app.PDBFile reads HIE, HID and HIP as HIS
 
 
 def randomRotation(rng):
@@ -219,9 +220,10 @@ def main():
     parser.add_argument("--repetitions", type=int, default=7, help="timed blocks per System (default 7)")
     parser.add_argument("--seconds", type=float, default=2.0, help="target seconds per block (default 2)")
     parser.add_argument("--threads", default=None, help="CPU platform Threads (default: the platform's)")
+    parser.add_argument("--output", default=str(RESULTS / "intrabody_cost"), help="path of the .csv and .log, less the suffix")
     args = parser.parse_args()
     RESULTS.mkdir(parents=True, exist_ok=True)
-    openLog(RESULTS / "intrabody_cost.log")
+    openLog(Path(args.output + ".log"))
     platform = openmm.Platform.getPlatformByName("CPU")
     if args.threads:
         platform.setPropertyDefaultValue("Threads", args.threads)
@@ -234,11 +236,11 @@ def main():
         "interleaved rounds)")
     for row in rows:
         say(f"{row['system']:<12}{row['full_ms_per_step']:>14.2f}{row['lean_ms_per_step']:>14.2f}{row['lean_to_full']:>13.3f}")
-    with open(RESULTS / "intrabody_cost.csv", "w", newline="") as stream:
+    with open(args.output + ".csv", "w", newline="") as stream:
         writer = csv.DictWriter(stream, fieldnames=list(rows[0]))
         writer.writeheader()
         writer.writerows(rows)
-    say(f"wrote {(RESULTS / 'intrabody_cost.csv').relative_to(ROOT)}")
+    say(f"wrote {args.output}.csv")
 
 
 if __name__ == "__main__":

@@ -154,11 +154,11 @@ def _checkSystem(bodies, topology, system):
         i, j, _ = system.getConstraintParameters(constraint)
         first, second = bodyOf.get(i), bodyOf.get(j)
         if (first is not None or second is not None) and first != second:
-            where = {None: "in no body"}
+            def where(body):
+                return "in no body" if body is None else f"in body {body}"
             raise ValueError(
-                f"rigidBodiesFromTopology: constraint {constraint} joins {_describeAtom(atoms[i])} "
-                f"({where.get(first, f'in body {first}')}) to {_describeAtom(atoms[j])} "
-                f"({where.get(second, f'in body {second}')}); a rigid body cannot be constrained to anything "
+                f"rigidBodiesFromTopology: constraint {constraint} joins {_describeAtom(atoms[i])} ({where(first)}) "
+                f"to {_describeAtom(atoms[j])} ({where(second)}); a rigid body cannot be constrained to anything "
                 "outside it: select both atoms or neither (or build the System with fewer constraints)")
 
 
