@@ -75,7 +75,7 @@ def runInterleaved(runs, steps, sampleEvery):
     for number in range(rounds):
         for run in runs:
             run.advance(sampleEvery)
-        if (number + 1) % max(1, rounds//5) == 0:
+        if (number + 1) % max(1, rounds//5) == 0 or number + 1 == rounds:
             print(f"  ... {(number + 1)*sampleEvery} of {steps} steps", flush=True)
 
 
