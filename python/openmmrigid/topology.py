@@ -175,7 +175,7 @@ def rigidBodiesFromTopology(topology, residues=(), atoms=None, merge=None, merge
         The topology the System was built from (atom indices are particle indices).
     residues : str or list of str
         The names of the residues to make rigid, as in the topology (``"LIG"``, ``["LIG", "HOH"]``),
-        matched exactly. Every name must occur. With explicit bodies the integrator makes nothing
+        matched exactly (``openmm.app.PDBFile`` reads HIE, HID and HIP as HIS, for example). Every name must occur. With explicit bodies the integrator makes nothing
         else rigid: list the water's residue name (``"HOH"``) too if the water should stay rigid.
     atoms : str or dict, optional
         Which atoms of a selected residue belong to its body: a regular expression that must match
