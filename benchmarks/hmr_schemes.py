@@ -63,6 +63,8 @@ def parseArguments():
     parser.add_argument("--constraints", choices=["HBonds", "AllBonds", "HAngles"], default="HBonds",
                         help="the protein's constraints (default HBonds)")
     parser.add_argument("--steps", type=float, nargs="+", default=[4, 6, 8], help="rigid-body steps in fs (default 4 6 8)")
+    parser.add_argument("--verlet-steps", type=float, nargs="+", help="the Verlet splitting's steps (default --steps)")
+    parser.add_argument("--omelyan-steps", type=float, nargs="+", help="Omelyan2's steps (default --steps)")
     parser.add_argument("--stock-steps", type=float, nargs="+", default=[4], help="stock VerletIntegrator steps in fs (default 4)")
     parser.add_argument("--time", type=float, default=10.0, help="NVE ps per run (default 10)")
     parser.add_argument("--equilibrate", type=float, default=10.0, help="Langevin ps at 4 fs before (default 10)")
@@ -72,7 +74,9 @@ def parseArguments():
     parser.add_argument("--seed", type=int, default=35)
     parser.add_argument("--output", default=str(RESULTS / "hmr_schemes"))
     args = parser.parse_args()
-    for step in args.steps + args.stock_steps:
+    args.verlet_steps = args.verlet_steps or args.steps
+    args.omelyan_steps = args.omelyan_steps or args.steps
+    for step in args.verlet_steps + args.omelyan_steps + args.stock_steps:
         if SAMPLE_FS % step:
             parser.error(f"step {step:g} fs does not divide the sample interval of {SAMPLE_FS} fs")
     return args
@@ -151,8 +155,8 @@ class Run:
 def makeRuns(system, state, platform, args):
     runs = [Run(f"stock VerletIntegrator {stepFs:g} fs", "stock", stepFs, openmm.VerletIntegrator(stepFs*unit.femtosecond),
                 system, state, platform) for stepFs in args.stock_steps]
-    for scheme in ("Verlet", "Omelyan2"):
-        for stepFs in args.steps:
+    for scheme, steps in (("Verlet", args.verlet_steps), ("Omelyan2", args.omelyan_steps)):
+        for stepFs in steps:
             integrator = openmmrigid.RigidBodyIntegrator(stepFs*unit.femtosecond)
             integrator.setSplitting(getattr(openmmrigid.RigidBodyIntegrator, scheme))
             runs.append(Run(f"RigidBodyIntegrator {scheme} {stepFs:g} fs", scheme, stepFs, integrator, system, state,
