@@ -25,8 +25,12 @@ since rigid water has 6 either way), the fluctuation (standard deviation about t
 to stock's, and ns/day (simulated time over the wall time of the step calls). A run stops at an
 exception, a non-finite energy, or |E - E0| above --threshold kJ/mol per degree of freedom.
 
-    python benchmarks/hmr_schemes.py                     # 10 ps per run: about 10 minutes on 2 busy cores
+    python benchmarks/hmr_schemes.py --stock-steps 4 6   # 10 ps per run: about 15 minutes on 2 busy cores
+    python benchmarks/hmr_schemes.py --constraints AllBonds --stock-steps 4 6 --verlet-steps 4 6 \
+        --omelyan-steps 4 6 8 --time 6 --equilibrate 5 --output benchmarks/results/hmr_schemes_allbonds
     python benchmarks/hmr_schemes.py --time 2 --equilibrate 2   # a quick look
+
+(With --constraints AllBonds, Verlet at 8 fs has crashed the process with a segmentation fault; see the README.)
 
 Writes benchmarks/results/hmr_schemes.csv and hmr_schemes.log (a copy of what is printed).
 """
