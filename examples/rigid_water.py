@@ -1,11 +1,17 @@
 """Rigid TIP4P-Ew water: openmmrigid.RigidBodyIntegrator next to stock Verlet + SETTLE.
 
 Builds a box of TIP4P-Ew water with openmm.app (PME), equilibrates it with a stock Langevin
-integrator, then runs NVE from the same state with both integrators and prints how well each
-conserves the total energy: the drift (slope of a linear fit, per degree of freedom) and the
-fluctuation (standard deviation about the fit).
+integrator, then runs NVE from the same state with stock VerletIntegrator + SETTLE and with
+RigidBodyIntegrator (Exact and NoSquish rotation), and prints how well each conserves the total
+energy: the drift (slope of a linear fit, per degree of freedom) and the fluctuation (standard
+deviation about the fit), and what a step costs.
 
-    python examples/rigid_water.py [--molecules 500] [--step 2] [--time 10] [--platform CPU]
+The three runs are interleaved: each Context in turn advances one sampling interval, and only the
+step() calls are timed, so that all three see the same load on the machine (timing them one after
+another on shared cores can make any of them look faster or slower). The cost is given as ms/step
+and as the median, over the rounds, of each integrator's time divided by stock's in the same round.
+
+    python examples/rigid_water.py [--molecules 500] [--step 2] [--time 5] [--platform CPU]
 
 The default settings take about a minute on two cores.
 """
@@ -38,23 +44,39 @@ def degreesOfFreedom(system):
     return 3*massive - system.getNumConstraints() - (3 if remover else 0)
 
 
-def runNVE(system, state, integrator, platform, steps, sampleEvery):
-    """Run from `state`; return times (ps), total energies (kJ/mol) and seconds per step."""
-    context = openmm.Context(system, integrator, platform)
-    context.setState(state)
-    if isinstance(integrator, openmm.VerletIntegrator):
-        context.applyConstraints(1e-10)
-        context.applyVelocityConstraints(1e-10)
-    times, energies = [], []
-    start = time.perf_counter()
-    for sample in range(steps//sampleEvery + 1):
-        if sample > 0:
-            integrator.step(sampleEvery)
-        current = context.getState(getEnergy=True)
-        times.append(current.getTime().value_in_unit(unit.picosecond))
-        energies.append((current.getKineticEnergy() + current.getPotentialEnergy()).value_in_unit(unit.kilojoule_per_mole))
-    elapsed = time.perf_counter() - start
-    return np.array(times), np.array(energies), elapsed/steps
+class Run:
+    """One integrator in its own Context, from `state`: times (ps), total energies (kJ/mol), seconds in step()."""
+
+    def __init__(self, name, system, state, integrator, platform):
+        self.name, self.integrator = name, integrator
+        self.context = openmm.Context(system, integrator, platform)
+        self.context.setState(state)
+        if isinstance(integrator, openmm.VerletIntegrator):
+            self.context.applyConstraints(1e-10)
+            self.context.applyVelocityConstraints(1e-10)
+        self.times, self.energies, self.roundSeconds = [], [], []
+        self.record()
+
+    def record(self):
+        current = self.context.getState(getEnergy=True)
+        self.times.append(current.getTime().value_in_unit(unit.picosecond))
+        self.energies.append((current.getKineticEnergy() + current.getPotentialEnergy()).value_in_unit(unit.kilojoule_per_mole))
+
+    def advance(self, steps):
+        start = time.perf_counter()
+        self.integrator.step(steps)
+        self.roundSeconds.append(time.perf_counter() - start)
+        self.record()
+
+
+def runInterleaved(runs, steps, sampleEvery):
+    """Advance every run by `sampleEvery` steps in turn until each has taken `steps`, with a progress line."""
+    rounds = steps//sampleEvery
+    for number in range(rounds):
+        for run in runs:
+            run.advance(sampleEvery)
+        if (number + 1) % max(1, rounds//5) == 0 or number + 1 == rounds:
+            print(f"  ... {(number + 1)*sampleEvery} of {steps} steps", flush=True)
 
 
 def summarize(times, energies, dof):
@@ -74,10 +96,14 @@ def main():
     args = parser.parse_args()
 
     platform = openmm.Platform.getPlatformByName(args.platform)
+    started = time.perf_counter()
+    print(f"building a box of about {args.molecules} {args.model.upper()} waters with openmm.app ...", flush=True)
     modeller, system = buildWater(args.molecules, args.model)
     waters = modeller.topology.getNumResidues()
     print(f"{waters} {args.model.upper()} waters, {system.getNumParticles()} particles, PME, platform {args.platform}")
 
+    print(f"minimizing, then equilibrating {args.equilibrate:g} ps with stock LangevinMiddleIntegrator at 300 K ...",
+          flush=True)
     equilibration = openmm.LangevinMiddleIntegrator(300*unit.kelvin, 1/unit.picosecond, 2*unit.femtosecond)
     context = openmm.Context(system, equilibration, platform)
     context.setPositions(modeller.positions)
@@ -86,30 +112,46 @@ def main():
     equilibration.step(int(args.equilibrate*500))
     state = context.getState(getPositions=True, getVelocities=True)
     del context
+    print(f"ready after {time.perf_counter() - started:.0f} s", flush=True)
 
     dt = args.step*unit.femtosecond
     steps = int(round(args.time/(args.step/1000)))
     sampleEvery = max(1, steps//200)
+    steps -= steps % sampleEvery
     dof = degreesOfFreedom(system)
-    print(f"NVE for {args.time:g} ps at {args.step:g} fs ({steps} steps) from the same equilibrated state; {dof} degrees of freedom\n")
-    print(f"{'integrator':<34}{'drift (kJ/mol/ns/dof)':>24}{'fluctuation (kJ/mol)':>24}{'ms/step':>10}")
     stock = openmm.VerletIntegrator(dt)
     stock.setConstraintTolerance(1e-10)
-    candidates = [("stock VerletIntegrator + SETTLE", stock)]
+    runs = [Run("stock VerletIntegrator + SETTLE", system, state, stock, platform)]
     for name, method in (("RigidBodyIntegrator (Exact)", openmmrigid.RigidBodyIntegrator.Exact),
                          ("RigidBodyIntegrator (NoSquish)", openmmrigid.RigidBodyIntegrator.NoSquish)):
         rigid = openmmrigid.RigidBodyIntegrator(dt)
         rigid.setRotationMethod(method)
-        candidates.append((name, rigid))
-    for name, integrator in candidates:
-        times, energies, seconds = runNVE(system, state, integrator, platform, steps, sampleEvery)
+        runs.append(Run(name, system, state, rigid, platform))
+    print(f"NVE for {steps*args.step/1000:g} ps at {args.step:g} fs ({steps} steps) from the same equilibrated state, "
+          f"the three integrators interleaved ({sampleEvery} steps each in turn); {dof} degrees of freedom ...",
+          flush=True)
+    runInterleaved(runs, steps, sampleEvery)
+
+    print(f"\n{'integrator':<34}{'drift':>17}{'fluctuation':>13}{'ms/step':>9}{'cost / stock':>14}")
+    print(f"{'':<34}{'(kJ/mol/ns/dof)':>17}{'(kJ/mol)':>13}{'':>9}{'(median)':>14}")
+    stockSeconds = np.array(runs[0].roundSeconds)
+    for run in runs:
+        energies = np.array(run.energies)
         if not np.all(np.isfinite(energies)):
-            print(f"{name:<34}{'unstable (NaN)':>24}")
+            print(f"{run.name:<34}{'unstable (NaN)':>30}")
             continue
-        drift, fluctuation = summarize(times, energies, dof)
-        print(f"{name:<34}{drift:>24.4g}{fluctuation:>24.4g}{seconds*1000:>10.2f}")
-    print("\ndrift: slope of a linear fit of the total energy, per degree of freedom; fluctuation: "
-          "standard deviation about that fit.")
+        drift, fluctuation = summarize(np.array(run.times), energies, dof)
+        msPerStep = 1000*sum(run.roundSeconds)/steps
+        ratio = np.median(np.array(run.roundSeconds)/stockSeconds)
+        print(f"{run.name:<34}{drift:>+17.4f}{fluctuation:>13.3f}{msPerStep:>9.2f}{ratio:>14.3f}")
+    print("\ndrift: slope of a linear fit of the total energy over the run, per degree of freedom (0 for an ideal\n"
+          "  integrator; short runs scatter about it, in either sign);\n"
+          "fluctuation: standard deviation of the total energy about that fit (smaller is more accurate; at 1 to\n"
+          "  2 fs most of it comes from the PME cutoff, not from the integrator: see the README's Results);\n"
+          "ms/step: wall time of the step() calls alone; cost / stock: median over the rounds of the integrator's\n"
+          "  time over stock's in the same round. Other work on the same cores still adds noise: the README's\n"
+          "  figures come from benchmarks/step_cost.py (longer blocks, medians of repetitions).")
+    print(f"total {time.perf_counter() - started:.0f} s")
 
 
 if __name__ == "__main__":

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Install openmm-rigid into .venv (created if missing) and run the main job: rigid TIP4P-Ew water with
 # RigidBodyIntegrator next to stock Verlet + SETTLE (examples/rigid_water.py; options pass through).
+# The three integrators run interleaved, so their costs are compared under the same load.
 #
 #   bash scripts/demo.sh
 set -euo pipefail
@@ -16,6 +17,8 @@ if ! .venv/bin/python -m pip --version >/dev/null 2>&1; then
         exit 1
     }
 fi
-.venv/bin/python -m pip install --upgrade pip
-.venv/bin/python -m pip install .
+echo "== installing openmm-rigid into .venv (the first time this builds the plugin: a few minutes)"
+.venv/bin/python -m pip install -q --upgrade pip
+.venv/bin/python -m pip install -q .
+echo "== running examples/rigid_water.py $*"
 .venv/bin/python examples/rigid_water.py "$@"

@@ -16,7 +16,12 @@ RigidBodyLangevinIntegrator
 RigidBodyIntegratorBase
     Their common base (bodies, rotation method, kinetic energies, degrees of freedom).
 RigidStateDataReporter
-    An ``openmm.app.StateDataReporter`` that takes its degrees of freedom from the integrator.
+    An ``openmm.app.StateDataReporter`` that takes its degrees of freedom from the integrator, with
+    columns for the translational and rotational kinetic energies and temperatures.
+rigidBodiesFromTopology
+    The bodies (lists of particle indices) of the selected residues of an ``openmm.app.Topology``.
+removeIntraBodyInteractions
+    A copy of a System without the bonded terms, nonbonded pairs and constraints inside each body.
 deserializeIntegrator
     A RigidBodyIntegrator or RigidBodyLangevinIntegrator from XML (``openmm.XmlSerializer.deserialize`` does the same).
 FreeRotor
@@ -30,7 +35,9 @@ from importlib.metadata import PackageNotFoundError, version as _distributionVer
 from . import special
 from .freerotor import FreeRotor
 from .integrator import RigidBodyIntegrator, RigidBodyIntegratorBase, RigidBodyLangevinIntegrator, deserializeIntegrator
+from .intrabody import removeIntraBodyInteractions
 from .reporters import RigidStateDataReporter
+from .topology import rigidBodiesFromTopology
 
 try:
     __version__ = _distributionVersion("openmm-rigid")
@@ -38,4 +45,4 @@ except PackageNotFoundError:  # imported from a source tree that was never insta
     __version__ = "unknown"
 
 __all__ = ["RigidBodyIntegrator", "RigidBodyLangevinIntegrator", "RigidBodyIntegratorBase", "RigidStateDataReporter", "deserializeIntegrator", "FreeRotor", "special",
-           "__version__"]
+           "rigidBodiesFromTopology", "removeIntraBodyInteractions", "__version__"]
