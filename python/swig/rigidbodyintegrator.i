@@ -361,6 +361,11 @@ then samples the canonical ensemble; the total energy minus ``getThermostatWork(
 effective energy) is conserved as the total energy is without a thermostat. Replaces any thermostat
 set before; takes effect at the next step.
 
+The velocities it rescales, and reports, are on-step: the temperature of their total kinetic energy
+(``computeSystemTemperature()``, ``StateDataReporter``'s column) reads the bath's at any step size, by
+construction. How that energy divides between translation and rotation is the dynamics': for rigid
+water at 6 to 8 fs the on-step rotation reads about 13 K cold and the translation as much warm.
+
 Parameters
 ----------
 temperature : float or openmm.unit.Quantity
