@@ -129,8 +129,9 @@ def main():
     print(f"running {'the full' if args.keep_internal else 'the lean'} System: {integrator.getNumBodies()} bodies "
           f"({', '.join(f'{n} {k}' for k, n in sorted(kinds.items()))}), {integrator.getNumDegreesOfFreedom()} degrees "
           f"of freedom; RigidBodyLangevinIntegrator at 300 K, 1/ps, {args.step:g} fs, {args.time:g} ps\n", flush=True)
-    # The velocities drawn for every atom lose the share of their energy that was not rigid motion when they are
-    # projected onto the bodies (a third, for water), so warm up first with a stronger friction.
+    # The velocities drawn for every atom keep their temperature when they are projected onto the bodies (the
+    # projection removes the non-rigid share of the energy together with its degrees of freedom); a short warm-up
+    # at a stronger friction lets the freshly built box settle before the run is reported.
     print("warming up: 1 ps at friction 10/ps ...", flush=True)
     integrator.setFriction(10/unit.picosecond)
     simulation.step(int(round(1000/args.step)))
@@ -156,7 +157,8 @@ def main():
     print("Temperature columns: 'Temperature' counts every degree of freedom the integrator moves "
           f"({integrator.getNumDegreesOfFreedom()}); the translational and rotational ones count 3 per body (and free "
           "particle), less 3 for the CMMotionRemover, and 3 per rigid body that is not linear: each should read 300 K "
-          "within its noise (the rotational one a little low at 2 fs, see the README).")
+          "within its noise (RigidBodyLangevinIntegrator reports LangevinMiddleIntegrator's half-step velocities, "
+          "whose temperature is the bath's at any stable step; see the README).")
     output = Path(__file__).resolve().parent / "output"
     output.mkdir(exist_ok=True)
     with open(output / "rigid_solute.pdb", "w") as stream:
