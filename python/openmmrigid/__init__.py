@@ -12,7 +12,7 @@ Contents
 RigidBodyIntegrator
     The integrator, an ``openmm.Integrator`` for ``openmm.Context`` and ``openmm.app.Simulation``.
 RigidBodyLangevinIntegrator
-    The same for constant temperature: a Langevin (BAOAB) integrator with the exact free drift.
+    The same for constant temperature: a Langevin integrator (LangevinMiddleIntegrator's arrangement, BAOAB with half-step velocities) with the exact free drift.
 RigidBodyIntegratorBase
     Their common base (bodies, rotation method, kinetic energies, degrees of freedom).
 RigidStateDataReporter
