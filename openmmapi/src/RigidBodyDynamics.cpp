@@ -40,8 +40,6 @@ RigidBodyDynamics::RigidBodyDynamics(RigidBodySystem& system, HostThreads* threa
         system(system), threads(threads), constraints(constraints) {
     if (system.getFreeConstraintSystem() != NULL && constraints == NULL)
         throw OpenMMException(system.getClassName() + ": internal error: no solver for the constraints among free particles");
-    if (system.getFreeConstraintSystem() == NULL)
-        this->constraints = NULL;
     states.resize(system.getNumBodies());
     const vector<double>& masses = system.getMasses();
     inverseMasses.resize(masses.size());
@@ -109,15 +107,11 @@ void RigidBodyDynamics::fitBody(int b, vector<Vec3>& positions, vector<Vec3>& ve
     system.assemble(b, positions, geometry, whole.data());
     for (int i = 0; i < n; i++)
         system.requireFinite(whole[i], "position", members[i], b);
-    const Vector3 center = system.centreOfMass(b, whole.data());
-    centred.resize(n);
-    for (int i = 0; i < n; i++)
-        for (int k = 0; k < 3; k++)
-            centred[i][k] = whole[i][k] - center[k];
+    const Vector3 center = system.centreOfMass(b, whole.data(), centred);
     Matrix3 rotation = identityMatrix();  // body to lab
     if (system.getKind(b) != RigidKindPoint) {
-        vector<Vector3> shape(system.getBodyCoordinates(b), system.getBodyCoordinates(b) + n);
-        vector<double> weights(n);
+        shape.assign(system.getBodyCoordinates(b), system.getBodyCoordinates(b) + n);
+        weights.resize(n);
         for (int i = 0; i < n; i++)
             weights[i] = system.getMasses()[members[i]];
         double residual;

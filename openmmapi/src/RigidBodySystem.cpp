@@ -116,6 +116,16 @@ Vector3 RigidBodySystem::centreOfMass(int b, const Vec3* values) const {
     return massWeightedMean(masses, getBodyParticles(b), getBodySize(b), bodyMass[b], [&](int i) -> const Vec3& { return values[i]; });
 }
 
+Vector3 RigidBodySystem::centreOfMass(int b, const Vec3* values, vector<Vector3>& offsets) const {
+    const Vector3 center = centreOfMass(b, values);
+    const int n = getBodySize(b);
+    offsets.resize(n);
+    for (int i = 0; i < n; i++)
+        for (int k = 0; k < 3; k++)
+            offsets[i][k] = values[i][k] - center[k];
+    return center;
+}
+
 Vector3 RigidBodySystem::centreOfMass(int b, const vector<Vec3>& values) const {
     const int* members = getBodyParticles(b);
     return massWeightedMean(masses, members, getBodySize(b), bodyMass[b], [&](int i) -> const Vec3& { return values[members[i]]; });
@@ -176,11 +186,8 @@ bool RigidBodySystem::shapeBody(int b, const vector<Vec3>& positions, const Step
                     "the body its shape put them " + to_string(distance) + " nm apart; remove the constraint or set positions "
                     "that satisfy it");
     }
-    const Vector3 center = centreOfMass(b, whole.data());
-    vector<Vector3> centred(n);
-    for (int i = 0; i < n; i++)
-        for (int k = 0; k < 3; k++)
-            centred[i][k] = whole[i][k] - center[k];
+    vector<Vector3> centred;
+    centreOfMass(b, whole.data(), centred);
     setShape(b, centred);
     return true;
 }
@@ -382,11 +389,8 @@ void RigidBodySystem::shapeFromDistances(int b, const vector<double>& pairDistan
         for (int i = 0; i < n; i++)
             coordinates[i][k] = vectors[i*n + column]*scale;
     }
-    const Vector3 center = centreOfMass(b, coordinates.data());
-    vector<Vector3> centred(n);
-    for (int i = 0; i < n; i++)
-        for (int k = 0; k < 3; k++)
-            centred[i][k] = coordinates[i][k] - center[k];
+    vector<Vector3> centred;
+    centreOfMass(b, coordinates.data(), centred);
     setShape(b, centred);
     // Distances do not tell a three-dimensional shape from its mirror image; the first fit to
     // positions does. Planar and linear shapes are their own mirror images up to a rotation.

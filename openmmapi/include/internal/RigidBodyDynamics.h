@@ -190,9 +190,14 @@ private:
     std::vector<OpenMM::Vec3> previousPositions;
     /** The body particles' velocities as this class last wrote or read them, consistent with the states. */
     std::vector<OpenMM::Vec3> writtenVelocities;
-    /** Scratch for the fits: one body's assembled positions and their offsets from its centre. */
+    /**
+     * Scratch for the fits, so that a projection (every barostat move) allocates nothing: one body's
+     * assembled positions, their offsets from its centre, its shape (mirrored when its handedness is
+     * open), its masses, and the lab-frame arms of its particles.
+     */
     std::vector<OpenMM::Vec3> whole;
-    std::vector<Vector3> centred, arms;
+    std::vector<Vector3> centred, shape, arms;
+    std::vector<double> weights;
 };
 
 } // namespace OpenMMRigid

@@ -137,6 +137,8 @@ public:
     void assemble(int b, const std::vector<OpenMM::Vec3>& positions, const StepGeometry& geometry, OpenMM::Vec3* whole) const;
     /** The centre of mass sum_i m_i x_i / M of body b, with x_i = values[i] in the body's order. */
     Vector3 centreOfMass(int b, const OpenMM::Vec3* values) const;
+    /** centreOfMass(b, values), with each x_i's offset from it in offsets (resized to the body's size). */
+    Vector3 centreOfMass(int b, const OpenMM::Vec3* values, std::vector<Vector3>& offsets) const;
     /** The centre of mass of body b with x_i = values[particle i] (e.g. the velocity of the centre of mass). */
     Vector3 centreOfMass(int b, const std::vector<OpenMM::Vec3>& values) const;
     /** The massive particles in no body. */
