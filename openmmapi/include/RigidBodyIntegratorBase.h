@@ -169,6 +169,11 @@ protected:
 private:
     /** Body b, with its shape (an OpenMMException if it is an explicit body whose positions were never set). */
     const RigidBodySystem& getShapedBody(int b) const;
+    /**
+     * Give the explicit bodies without a shape the one they have in the Context's positions; those
+     * the positions cannot shape wait, or, if strict, are an OpenMMException saying why.
+     */
+    void captureShapes(const StepGeometry& geometry, bool strict);
     /** Fit the bodies to the Context's positions (giving explicit bodies their shapes first, strictly). */
     void projectBodies();
     /** Apply the kick getLoadedVelocityKick() asked for after a checkpoint, if any (the bodies must be projected). */

@@ -148,15 +148,18 @@ void RigidBodyIntegratorBase::applyLoadedVelocityKick() {
     loadedVelocityKick = 0.0;
 }
 
+void RigidBodyIntegratorBase::captureShapes(const StepGeometry& geometry, bool strict) {
+    if (topology->allShapesKnown())
+        return;
+    vector<Vec3> positions;
+    context->getPositions(positions);
+    topology->captureShapes(positions, geometry, strict);
+}
+
 void RigidBodyIntegratorBase::projectBodies() {
     IntegrateRigidBodyStepKernel& stepKernel = getKernel();
     const StepGeometry geometry = currentGeometry(*context, *topology);
-    if (!topology->allShapesKnown()) {
-        // An explicit body still without a shape: the error says why.
-        vector<Vec3> positions;
-        context->getPositions(positions);
-        topology->captureShapes(positions, geometry, true);
-    }
+    captureShapes(geometry, true);  // an explicit body still without a shape: the error says why
     stepKernel.setGeometry(*context, geometry);
     stepKernel.project(*context);
 }
@@ -174,11 +177,8 @@ void RigidBodyIntegratorBase::stateChanged(State::DataType changed) {
     // Explicit bodies take their shape from the first positions set, whatever (an energy
     // minimization, say) moves the particles before the first step; a constraint the shape
     // contradicts is an error here.
-    if (changed == State::Positions && !topology->allShapesKnown()) {
-        vector<Vec3> positions;
-        context->getPositions(positions);
-        topology->captureShapes(positions, currentGeometry(*context, *topology), false);
-    }
+    if (changed == State::Positions)
+        captureShapes(currentGeometry(*context, *topology), false);
     // Project now, so that the State a user reads before the first step (its kinetic energy, its
     // velocities) is the rigid one the step starts from. What cannot be projected yet (an explicit
     // body without a shape, a non-finite coordinate) stays for the step, which says what is wrong.
