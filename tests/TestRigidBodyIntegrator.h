@@ -53,6 +53,7 @@
 #include "openmm/internal/AssertionUtilities.h"
 #include <algorithm>
 #include <chrono>
+#include <cstdlib>
 #include <cmath>
 #include <functional>
 #include <iostream>
@@ -85,6 +86,18 @@ const double rigidityTolerance = 1e-12;         // nm
 const double orderRatio = 4.0, orderRatioSpread = 0.5;
 
 std::map<string, string> platformProperties;    // set by the platform file
+/**
+ * Where the water boxes are minimised and equilibrated, if not on the platform under test (set by
+ * the platform file): OpenMM's energy minimiser crashes on PoCL's OpenCL.
+ */
+Platform* preparationPlatform = nullptr;
+/**
+ * The relative accuracy to which the platform's solver meets the constraints among free particles,
+ * whatever tolerance it is given, if that is coarser than the tolerance (set by the platform file):
+ * OpenMM's SHAKE on OpenCL leaves about 1.5e-8 in double precision (stock VerletIntegrator, asked
+ * for 1e-9, measured the same).
+ */
+double constraintSolverAccuracy = 0.0;
 
 /** A short message with full precision numbers. */
 template <class... Args>
@@ -830,16 +843,18 @@ Scene makeWaterBox(Platform& platform, bool fourSite) {
                 scene.bodies.push_back(body);
             }
     // Minimise and thermalise with constraints, then take the state.
+    Platform& preparing = (preparationPlatform != nullptr ? *preparationPlatform : platform);
+    const std::map<string, string> preparingProperties = (preparationPlatform != nullptr ? std::map<string, string>() : platformProperties);
     VerletIntegrator minimiser(0.001);
     minimiser.setConstraintTolerance(1e-10);
-    Context context(system, minimiser, platform, platformProperties);
+    Context context(system, minimiser, preparing, preparingProperties);
     context.setPositions(scene.positions);
     context.applyConstraints(1e-10);
     LocalEnergyMinimizer::minimize(context, 5.0, 100);
     LangevinMiddleIntegrator thermostat(300.0, 5.0, 0.002);
     thermostat.setRandomNumberSeed(fourSite ? 4 : 3);
     thermostat.setConstraintTolerance(1e-10);
-    Context equilibration(system, thermostat, platform, platformProperties);
+    Context equilibration(system, thermostat, preparing, preparingProperties);
     equilibration.setPositions(context.getState(State::Positions).getPositions());
     equilibration.setVelocitiesToTemperature(300.0, 5);
     thermostat.step(300);
@@ -911,7 +926,7 @@ void checkRigidAndConstrained(const Scene& scene, const vector<Vec3>& start, con
         scene.system->getConstraintParameters(c, i, j, length);
         Vec3 d = positions[i] - positions[j], dv = velocities[i] - velocities[j];
         double r = sqrt(d.dot(d));
-        check(fabs(r/length - 1) <= tolerance, message("constraint ", c, ": ", r, " nm, not ", length));
+        check(fabs(r/length - 1) <= std::max(tolerance, constraintSolverAccuracy), message("constraint ", c, ": ", r, " nm, not ", length, " (relative error ", r/length - 1, ")"));
         check(fabs(d.dot(dv)/r) <= 10*tolerance, message("constraint ", c, ": its length changes at ", d.dot(dv)/r, " nm/ps"));
     }
 }
@@ -1181,10 +1196,16 @@ int runPlatformTests(Platform& platform) {
     return runTestList(tests);
 }
 
-/** Run each test, print "ok" with its time or "FAIL" with the message, and return the number of failures. */
+/**
+ * Run each test, print "ok" with its time or "FAIL" with the message, and return the number of
+ * failures. With OPENMMRIGID_TEST_FILTER set, only the tests whose names contain it run.
+ */
 int runTestList(const vector<std::pair<string, std::function<void()> > >& tests) {
     int failures = 0;
+    const char* filter = getenv("OPENMMRIGID_TEST_FILTER");
     for (auto& test : tests) {
+        if (filter != nullptr && test.first.find(filter) == string::npos)
+            continue;
         try {
             auto start = std::chrono::steady_clock::now();
             test.second();

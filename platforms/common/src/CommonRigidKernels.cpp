@@ -182,11 +182,6 @@ void CommonIntegrateRigidBodyStepKernel::Impl::followWrapping() {
             if (i == 0) {
                 for (int k = 0; k < 3; k++)
                     first[k] = cell[k];
-                if (cell[0] != 0 || cell[1] != 0 || cell[2] != 0) {
-                    for (int k = 0; k < 3; k++)
-                        s[k] += cell[0]*box[0][k] + cell[1]*box[1][k] + cell[2]*box[2][k];
-                    statesChanged = true;
-                }
             }
             else if (cell[0] != first[0] || cell[1] != first[1] || cell[2] != first[2]) {
                 double x[3];
@@ -212,6 +207,12 @@ void CommonIntegrateRigidBodyStepKernel::Impl::followWrapping() {
                 offsets[index].z += first[2] - cell[2];
                 positionsChanged = true;
             }
+        }
+        // The centre moves after its particles were compared with the unmoved body.
+        if (first[0] != 0 || first[1] != 0 || first[2] != 0) {
+            for (int k = 0; k < 3; k++)
+                s[k] += first[0]*box[0][k] + first[1]*box[1][k] + first[2]*box[2][k];
+            statesChanged = true;
         }
     }
     if (statesChanged)

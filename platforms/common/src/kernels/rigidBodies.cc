@@ -17,6 +17,10 @@
  */
 
 #define RIGID_STATE_SIZE 18
+/* The threads of the one work group of rigidSumPairs (the host launches it with this many). */
+#ifndef RIGID_SUM_THREADS
+#define RIGID_SUM_THREADS 128
+#endif
 #define RIGID_ERROR_BODY_NOT_FINITE 1
 #define RIGID_ERROR_BODY_MOVES 2
 #define RIGID_ERROR_PARTICLE_MOVES 3
