@@ -26,13 +26,13 @@ find_library(OPENMM_CUDA_LIBRARY NAMES OpenMMCUDA
              HINTS "${OPENMM_DIR}/lib/plugins" NO_DEFAULT_PATH
              DOC "libOpenMMCUDA.so of the openmm-cuda-13 wheel (pip install openmm-cuda-13==8.6.1)")
 
-find_path(OPENMM_CUDA_INCLUDE_DIR NAMES cuda.h builtin_types.h vector_functions.h
+find_path(OPENMM_CUDA_INCLUDE_DIR NAMES cuda.h
           HINTS "${_openmmCudaSitePackages}/nvidia/cu13/include" NO_DEFAULT_PATH
           DOC "Folder with the CUDA driver API headers (cuda.h)")
 if(NOT OPENMM_CUDA_INCLUDE_DIR)
     find_package(CUDAToolkit QUIET)
     if(CUDAToolkit_FOUND)
-        find_path(OPENMM_CUDA_INCLUDE_DIR NAMES cuda.h builtin_types.h vector_functions.h
+        find_path(OPENMM_CUDA_INCLUDE_DIR NAMES cuda.h
                   HINTS ${CUDAToolkit_INCLUDE_DIRS} NO_DEFAULT_PATH)
     endif()
 endif()
