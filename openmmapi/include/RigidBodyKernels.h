@@ -86,6 +86,13 @@ public:
     virtual void computeKineticEnergies(OpenMM::ContextImpl& context, double& translational, double& rotational) = 0;
     /** The kinetic energy sum m v^2 / 2 over the massive particles. */
     virtual double computeKineticEnergy(OpenMM::ContextImpl& context) = 0;
+    /**
+     * Before the step's last force evaluation, whose forces the next step's first kick reuses: every
+     * stage that can find the simulation unstable has run (a platform that defers its checks reports
+     * them here, by an OpenMMException), and a platform that reorders its atoms does it here.
+     */
+    virtual void beforeLastForces(OpenMM::ContextImpl& context) {
+    }
     /** After the last stage: advance the context's time and step count by dt, and record the positions written. */
     virtual void finishStep(OpenMM::ContextImpl& context, double dt) = 0;
 };

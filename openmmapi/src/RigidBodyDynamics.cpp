@@ -24,27 +24,20 @@ Vec3 toVec3(const Vector3& v) {
     return Vec3(v[0], v[1], v[2]);
 }
 
-/** One Newton-Schulz step towards the nearest rotation, A (3 - A^T A) / 2: removes the rounding drift. */
-void reorthonormalize(Matrix3& a) {
-    Matrix3 g = multiplyTransposed(a, a);
-    Matrix3 correction;
-    for (int i = 0; i < 3; i++)
-        for (int j = 0; j < 3; j++)
-            correction[i][j] = 0.5*((i == j ? 3.0 : 0.0) - g[i][j]);
-    a = multiply(a, correction);
-}
-
 } // namespace
 
 RigidBodyDynamics::RigidBodyDynamics(RigidBodySystem& system, HostThreads* threads, HostConstraints* constraints) :
         system(system), threads(threads), constraints(constraints) {
-    if (system.getFreeConstraintSystem() != NULL && constraints == NULL)
-        throw OpenMMException(system.getClassName() + ": internal error: no solver for the constraints among free particles");
     states.resize(system.getNumBodies());
     const vector<double>& masses = system.getMasses();
     inverseMasses.resize(masses.size());
     for (size_t i = 0; i < masses.size(); i++)
         inverseMasses[i] = (masses[i] == 0.0 ? 0.0 : 1.0/masses[i]);
+}
+
+void RigidBodyDynamics::requireConstraints() const {
+    if (system.getFreeConstraintSystem() != NULL && constraints == NULL)
+        throw OpenMMException(system.getClassName() + ": internal error: no solver for the constraints among free particles");
 }
 
 void RigidBodyDynamics::forEachBody(const function<void(int)>& task) {
@@ -84,10 +77,8 @@ void RigidBodyDynamics::setGeometry(const StepGeometry& newGeometry) {
 }
 
 Vector3 RigidBodyDynamics::bodyAngularVelocity(int b, const Vector3& bodyAngularMomentum) const {
-    const double* moments = system.getMoments(b);
     Vector3 omega;
-    for (int k = 0; k < 3; k++)
-        omega[k] = (moments[k] > 0.0 ? bodyAngularMomentum[k]/moments[k] : 0.0);
+    rigidAngularVelocity(system.getMoments(b), bodyAngularMomentum.data(), omega.data());
     return omega;
 }
 
@@ -189,10 +180,10 @@ void RigidBodyDynamics::rotate(int b, double dt, RigidBodyOptions::RotationMetho
         Vector3 omega = bodyAngularVelocity(b, bodyMomentum);
         rigidRotorAdvance(&shape, omega.data(), attitude, dt);
     }
+    rigidReorthonormalize(attitude);
     for (int i = 0; i < 3; i++)
         for (int j = 0; j < 3; j++)
             state.attitude[i][j] = attitude[i][j];
-    reorthonormalize(state.attitude);
 }
 
 void RigidBodyDynamics::refreshMomenta(int b, const vector<Vec3>& positions, const vector<Vec3>& velocities) {
@@ -249,6 +240,7 @@ void RigidBodyDynamics::driftBody(int b, double h, RigidBodyOptions::RotationMet
 void RigidBodyDynamics::kickAndDrift(vector<Vec3>& positions, vector<Vec3>& velocities, const vector<Vec3>& forces,
                                      double kick, double drift, RigidBodyOptions::RotationMethod method,
                                      double constraintTolerance) {
+    requireConstraints();
     const bool kicks = (kick != 0.0);
     forEachBody([&](int b) {
         BodyState& state = states[b];
@@ -259,8 +251,7 @@ void RigidBodyDynamics::kickAndDrift(vector<Vec3>& positions, vector<Vec3>& velo
             Vec3 velocity = toVec3(state.velocity) + force*(kick/system.getBodyMass(b));
             Vec3 angularMomentum = toVec3(state.angularMomentum) + torque*kick;
             if (!(isfinite(velocity.dot(velocity)) && isfinite(angularMomentum.dot(angularMomentum))))
-                throw OpenMMException(system.getClassName() + ": body " + to_string(b) + " has a non-finite velocity, force or "
-                        "torque; the simulation is unstable (try a smaller step size)");
+                throw OpenMMException(notFiniteMessage(system.getClassName(), b));
             state.velocity = toVector(velocity);
             state.angularMomentum = toVector(angularMomentum);
         }
@@ -296,19 +287,57 @@ void RigidBodyDynamics::checkDisplacement(const char* what, int index, double di
     // where there is no limit.
     if (distance <= geometry.displacementLimit && isfinite(distance))
         return;
+    throw OpenMMException(unstableMessage(system.getClassName(), what, index, distance, drift, geometry));
+}
+
+string RigidBodyDynamics::unstableMessage(const string& className, const char* what, int index, double distance, double drift,
+                                          const StepGeometry& geometry) {
     stringstream text;
-    text << system.getClassName() << ": " << what << " " << index;
+    text << className << ": " << what << " " << index;
     if (isfinite(distance))
         text << " would move " << distance << " nm in one drift of " << fabs(drift) << " ps, more than " <<
                 geometry.displacementLimitName << " (" << geometry.displacementLimit << " nm)";
     else
         text << " would move to a non-finite position in one drift of " << fabs(drift) << " ps";
     text << "; the simulation is unstable (try a smaller step size, or minimize the energy first)";
-    throw OpenMMException(text.str());
+    return text.str();
+}
+
+string RigidBodyDynamics::notFiniteMessage(const string& className, int body) {
+    return className + ": body " + to_string(body) + " has a non-finite velocity, force or torque; the simulation is unstable "
+            "(try a smaller step size)";
+}
+
+void RigidBodyDynamics::getStates(vector<double>& flat) const {
+    flat.resize(StateSize*states.size());
+    for (size_t b = 0; b < states.size(); b++) {
+        double* out = &flat[StateSize*b];
+        for (int k = 0; k < 3; k++) {
+            out[k] = states[b].center[k];
+            out[3 + k] = states[b].velocity[k];
+            out[6 + k] = states[b].angularMomentum[k];
+            for (int j = 0; j < 3; j++)
+                out[9 + 3*k + j] = states[b].attitude[k][j];
+        }
+    }
+}
+
+void RigidBodyDynamics::setStates(const vector<double>& flat) {
+    for (size_t b = 0; b < states.size(); b++) {
+        const double* in = &flat[StateSize*b];
+        for (int k = 0; k < 3; k++) {
+            states[b].center[k] = in[k];
+            states[b].velocity[k] = in[3 + k];
+            states[b].angularMomentum[k] = in[6 + k];
+            for (int j = 0; j < 3; j++)
+                states[b].attitude[k][j] = in[9 + 3*k + j];
+        }
+    }
 }
 
 void RigidBodyDynamics::thermalize(vector<Vec3>& positions, vector<Vec3>& velocities, double c, double kT,
                                    uint64_t seed, uint64_t step, double constraintTolerance) {
+    requireConstraints();
     // The exact Ornstein-Uhlenbeck flow: the mean decays by c, and the variance goes from its
     // starting value s to c^2 s + (1 - c^2) m kT, so the canonical variance m kT stays fixed.
     const double noise = sqrt((1.0 - c*c)*kT);
@@ -365,6 +394,7 @@ void RigidBodyDynamics::scaleMomenta(vector<Vec3>& velocities, double alpha) {
 
 void RigidBodyDynamics::closingKick(vector<Vec3>& positions, vector<Vec3>& velocities, const vector<Vec3>& forces,
                                     double kick, double constraintTolerance) {
+    requireConstraints();
     forEachBody([&](int b) {
         BodyState& state = states[b];
         Vec3 force, torque;

@@ -60,6 +60,8 @@ void stepRigidBodyIntegrator(ContextImpl& context, IntegrateRigidBodyStepKernel&
     // the Context holds, and every drift is followed by a force evaluation.
     for (int stage = 0; stage < scheme.numDrifts; stage++) {
         kernel.kickAndDrift(context, scheme.kicks[stage]*dt, scheme.drifts[stage]*dt, method, tolerance);
+        if (stage == scheme.numDrifts - 1)
+            kernel.beforeLastForces(context);
         evaluateForces(context, integrator.getIntegrationForceGroups());
     }
     kernel.closingKick(context, scheme.kicks[scheme.numDrifts]*dt, tolerance);
@@ -97,6 +99,7 @@ void stepRigidBodyLangevinIntegrator(ContextImpl& context, IntegrateRigidBodySte
     if (friction > 0.0)
         kernel.thermalize(context, exp(-friction*dt), BOLTZ*integrator.getTemperature(), state.seed, state.randomCounter++, tolerance);
     kernel.kickAndDrift(context, 0.0, 0.5*dt, method, tolerance);
+    kernel.beforeLastForces(context);
     evaluateForces(context, integrator.getIntegrationForceGroups());
     // No kick: the rigid velocities written to the body particles, the constraints among free particles applied to velocities.
     kernel.closingKick(context, 0.0, tolerance);

@@ -33,28 +33,53 @@ RigidBodyIntegrator = _swig.RigidBodyIntegrator
 RigidBodyLangevinIntegrator = _swig.RigidBodyLangevinIntegrator
 
 _KERNEL_NAME = "IntegrateRigidBodyStep"
-# CMake's name for the shared library OpenMMRigidReference on each system.
-_KERNEL_LIBRARY = {"win32": "OpenMMRigidReference.dll", "darwin": "libOpenMMRigidReference.dylib"}.get(
-    sys.platform, "libOpenMMRigidReference.so")
 
 
-def _kernelsAreRegistered():
-    """Whether the Reference platform already has the kernels (from this module or a plugin folder)."""
+def _libraryName(target):
+    """CMake's file name for the shared library `target` on this system."""
+    return {"win32": f"{target}.dll", "darwin": f"lib{target}.dylib"}.get(sys.platform, f"lib{target}.so")
+
+
+# The plugin for each platform: the Reference one (Reference and CPU) is required; a GPU platform's is
+# loaded where both the plugin and the platform are present.
+_KERNEL_LIBRARY = _libraryName("OpenMMRigidReference")
+_GPU_LIBRARIES = {"OpenCL": _libraryName("OpenMMRigidOpenCL"), "CUDA": _libraryName("OpenMMRigidCUDA")}
+
+#: Why a GPU platform's plugin present in this package's folder did not load (platform name -> message).
+pluginLoadFailures = {}
+
+
+def _kernelsAreRegistered(platformName="Reference"):
+    """Whether the platform already has the kernels (from this module or a plugin folder)."""
     try:
-        return openmm.Platform.getPlatformByName("Reference").supportsKernels([_KERNEL_NAME])
-    except Exception:  # no Reference platform: nothing can be registered anyway
+        return openmm.Platform.getPlatformByName(platformName).supportsKernels([_KERNEL_NAME])
+    except Exception:  # no such platform: nothing can be registered anyway
         return False
 
 
+def _platformExists(name):
+    return any(openmm.Platform.getPlatform(i).getName() == name for i in range(openmm.Platform.getNumPlatforms()))
+
+
 def _loadKernels():
-    """Load the Reference and CPU kernels of the rigid-body integrators, once."""
-    if _kernelsAreRegistered():
-        return
-    path = os.path.join(os.path.dirname(os.path.abspath(__file__)), _KERNEL_LIBRARY)
-    try:
-        openmm.Platform.loadPluginLibrary(path)
-    except Exception as error:
-        raise ImportError(f"openmmrigid: cannot load the rigid-body integrator kernels from {path}: {error}") from error
+    """Load the rigid-body integrators' kernels for every platform this installation has them for, once."""
+    folder = os.path.dirname(os.path.abspath(__file__))
+    if not _kernelsAreRegistered():
+        path = os.path.join(folder, _KERNEL_LIBRARY)
+        try:
+            openmm.Platform.loadPluginLibrary(path)
+        except Exception as error:
+            raise ImportError(f"openmmrigid: cannot load the rigid-body integrator kernels from {path}: {error}") from error
+    # A GPU plugin that cannot load (no driver, no OpenCL runtime) must not stop the package: the
+    # reason is kept in pluginLoadFailures, as openmm.Platform.getPluginLoadFailures() does.
+    for platformName, library in _GPU_LIBRARIES.items():
+        path = os.path.join(folder, library)
+        if not os.path.exists(path) or not _platformExists(platformName) or _kernelsAreRegistered(platformName):
+            continue
+        try:
+            openmm.Platform.loadPluginLibrary(path)
+        except Exception as error:
+            pluginLoadFailures[platformName] = f"{path}: {error}"
 
 
 def _mostDerived(integrator):

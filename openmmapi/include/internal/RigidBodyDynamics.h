@@ -77,8 +77,9 @@ public:
     /**
      * @param system       the body topology (kept by reference)
      * @param threads      the threads of the per-body loops, or null to run them serially (kept by reference)
-     * @param constraints  the solver of the constraints among free particles; required if the topology
-     *                     has any (getFreeConstraintSystem()), else may be null (kept by reference)
+     * @param constraints  the solver of the constraints among free particles; required by the stages that
+     *                     move free particles if the topology has any (getFreeConstraintSystem()), else
+     *                     may be null, as for a platform that uses this class only for its fits (kept by reference)
      */
     RigidBodyDynamics(RigidBodySystem& system, HostThreads* threads, HostConstraints* constraints);
     /** Set the periodic box and the largest plausible drift (see StepGeometry), before a step or a fit. */
@@ -159,11 +160,30 @@ public:
     void computeKineticEnergies(const std::vector<OpenMM::Vec3>& velocities, double& translational, double& rotational) const;
     /** The kinetic energy sum m v^2 / 2 over every particle. */
     double computeKineticEnergy(const std::vector<OpenMM::Vec3>& velocities) const;
+    /** The number of doubles of one body's state in getStates(). */
+    static const int StateSize = 18;
+    /**
+     * Every body's state, StateSize doubles each: centre, velocity, angular momentum (lab frame),
+     * attitude (lab to body, row-major). A platform that keeps the states itself (on a device) takes
+     * them from here after a fit, and gives them back with setStates() before projectVelocities().
+     */
+    void getStates(std::vector<double>& states) const;
+    void setStates(const std::vector<double>& states);
+    /**
+     * The text of the error that stops an unstable step: a body or free particle ("body", "particle")
+     * that would move `distance` (not finite: to a non-finite position) in a drift of `drift` ps.
+     */
+    static std::string unstableMessage(const std::string& className, const char* what, int index, double distance, double drift,
+                                       const StepGeometry& geometry);
+    /** The text of the error for a body whose velocity, force or torque is not finite. */
+    static std::string notFiniteMessage(const std::string& className, int body);
 private:
     struct BodyState {
         Vector3 center, velocity, angularMomentum;  // angular momentum in the lab frame
         Matrix3 attitude;                           // lab to body
     };
+    /** The internal error of a stage that moves free particles with constraints but was given no solver. */
+    void requireConstraints() const;
     /** Run task(b) for every body, on the threads if there are any; the first exception is rethrown here. */
     void forEachBody(const std::function<void(int)>& task);
     /** Take body b's momenta from its particles if their velocities are not the ones this class wrote. */

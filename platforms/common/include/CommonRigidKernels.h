@@ -47,6 +47,7 @@ public:
     void scaleMomenta(OpenMM::ContextImpl& context, double alpha) override;
     void computeKineticEnergies(OpenMM::ContextImpl& context, double& translational, double& rotational) override;
     double computeKineticEnergy(OpenMM::ContextImpl& context) override;
+    void beforeLastForces(OpenMM::ContextImpl& context) override;
     void finishStep(OpenMM::ContextImpl& context, double dt) override;
 private:
     class ReorderListener;

@@ -113,4 +113,28 @@ RIGID_FUNCTION void rigidRotationMatrix(const double* x, double r[3][3]) {
     r[1][2] -= sinc*x[0]; r[2][1] += sinc*x[0];
 }
 
+/**
+ * One Newton-Schulz step towards the nearest rotation, a <- a (3 - a^T a) / 2: it removes the
+ * rounding drift an attitude gathers over many drifts (the error e of a^T a = 1 + e becomes O(e^2)).
+ */
+RIGID_FUNCTION void rigidReorthonormalize(double a[3][3]) {
+    double g[3][3], correction[3][3], result[3][3];
+    int i, j;
+    rigidMultiplyTransposed(a, a, g);
+    for (i = 0; i < 3; i++)
+        for (j = 0; j < 3; j++)
+            correction[i][j] = 0.5*((i == j ? 3.0 : 0.0) - g[i][j]);
+    rigidMultiply(a, correction, result);
+    for (i = 0; i < 3; i++)
+        for (j = 0; j < 3; j++)
+            a[i][j] = result[i][j];
+}
+
+/** The body-frame angular velocity omega_k = L_k / I_k from the body-frame angular momentum; a zero moment (the axis of a line) carries none. */
+RIGID_FUNCTION void rigidAngularVelocity(const double* moments, const double* angularMomentum, double* omega) {
+    int k;
+    for (k = 0; k < 3; k++)
+        omega[k] = (moments[k] > 0.0 ? angularMomentum[k]/moments[k] : 0.0);
+}
+
 #endif /* OPENMMRIGID_CORE_BASICS_H_ */

@@ -1,0 +1,660 @@
+#include "CommonRigidKernels.h"
+#include "CommonRigidKernelSources.h"
+#include "internal/RigidBodyDynamics.h"
+#include "openmm/OpenMMException.h"
+#include "openmm/common/ComputeForceInfo.h"
+#include "openmm/common/ContextSelector.h"
+#include "openmm/kernels.h"
+#include <algorithm>
+#include <cmath>
+#include <initializer_list>
+#include <map>
+
+using namespace OpenMM;
+using namespace std;
+
+namespace OpenMMRigid {
+
+namespace {
+
+/** Threads of the one work group that sums the kinetic energies (rigidSumPairs). */
+const int sumThreads = 128;
+
+/** The error codes of the kernels (rigidBodies.cc). */
+enum { ErrorNone = 0, ErrorBodyNotFinite = 1, ErrorBodyMoves = 2, ErrorParticleMoves = 3 };
+
+} // namespace
+
+/**
+ * Tells the platform's atom reordering what the bodies are: a body's particles are one group (so a
+ * body is inside one molecule, and moves by one box vector when molecules are wrapped), and two
+ * particles are interchangeable only if they hold the same place in bodies of the same size (or
+ * are both outside every body), so that reordering never swaps a body atom with a free one, whose
+ * constraints the free-particle solver holds by index.
+ */
+class CommonIntegrateRigidBodyStepKernel::BodyInfo : public ComputeForceInfo {
+public:
+    explicit BodyInfo(const RigidBodySystem& bodies) : bodies(bodies), role(bodies.getMasses().size(), 0),
+            slot(bodies.getMasses().size(), -1) {
+        for (int b = 0; b < bodies.getNumBodies(); b++)
+            for (int i = 0; i < bodies.getBodySize(b); i++) {
+                int p = bodies.getBodyParticles(b)[i];
+                role[p] = bodies.getBodySize(b);
+                slot[p] = i;
+            }
+    }
+    bool areParticlesIdentical(int particle1, int particle2) override {
+        return role[particle1] == role[particle2] && slot[particle1] == slot[particle2];
+    }
+    int getNumParticleGroups() override {
+        return bodies.getNumBodies();
+    }
+    void getParticlesInGroup(int index, vector<int>& particles) override {
+        particles.assign(bodies.getBodyParticles(index), bodies.getBodyParticles(index) + bodies.getBodySize(index));
+    }
+    bool areGroupsIdentical(int group1, int group2) override {
+        return bodies.getBodySize(group1) == bodies.getBodySize(group2);
+    }
+private:
+    const RigidBodySystem& bodies;
+    vector<int> role, slot;
+};
+
+/** The state the kernel keeps: the topology and the bodies' state on the device, and the kernels. */
+struct CommonIntegrateRigidBodyStepKernel::Impl {
+    explicit Impl(ComputeContext& cc) : cc(cc) {
+    }
+    ComputeContext& cc;
+    RigidBodySystem* bodies = nullptr;
+    int numBodies = 0, numBodyParticles = 0, numFree = 0;
+    StepGeometry geometry;
+    /** The host twin of the stages, for the fits (projections after outside changes). */
+    unique_ptr<RigidBodyDynamics> host;
+    /** The solver of the constraints among free particles, if there are any. */
+    unique_ptr<IntegrationUtilities> solver;
+    /** An UpdateStateDataKernel of the platform's own, to move positions and velocities between host and device without a notice. */
+    Kernel stateData;
+    ComputeArray bodyStart, bodyParticles, bodyCoordinates, bodyParticleMass, bodyMass, shapes, freeParticles;
+    ComputeArray currentIndex, states, writtenVelocities, errorCode, errorData, energies, sums;
+    ComputeArray startStates, startPosq, startPosqCorrection, startVelm;
+    ComputeKernel updateAtomOrder, recordVelocities, kickDrift, kickDriftFree, finishFreeDrift, closingKick, kickFree;
+    ComputeKernel thermalizeBodies, thermalizeFree, scaleBodies, scaleFree, kineticEnergies, sumPairs;
+    /** How many times the atoms were reordered, and the count when the step began. */
+    int reorders = 0, reordersAtStepStart = 0;
+    /** Whether this kernel is reordering the atoms (its own call of reorderAtoms(), or a projection's setPositions()). */
+    bool reordering = false;
+    /** Whether positions were written by this kernel, and the step count then. */
+    bool written = false;
+    long long writtenStep = 0;
+    ArrayInterface& posqCorrection() {
+        // Read only in mixed precision; any array will do as the unused argument otherwise.
+        return cc.getUseMixedPrecision() ? cc.getPosqCorrection() : cc.getPosq();
+    }
+    void rebuildAtomOrder() {
+        updateAtomOrder->execute(cc.getNumAtoms());
+    }
+    void followWrapping();
+    void recordWrittenVelocities() {
+        if (numBodyParticles > 0)
+            recordVelocities->execute(numBodyParticles);
+    }
+};
+
+/** Keeps the bodies coherent with the platform's arrays after the atoms were reordered. */
+class CommonIntegrateRigidBodyStepKernel::ReorderListener : public ComputeContext::ReorderListener {
+public:
+    explicit ReorderListener(Impl* impl) : impl(impl) {
+    }
+    void execute() override {
+        if (impl == nullptr)
+            return;  // the kernel is gone; the ComputeContext owns this listener until it is destroyed
+        impl->reorders++;
+        impl->rebuildAtomOrder();
+        // A reorder this kernel asked for moves bodies whose state is current; any other (in the
+        // Context's setPositions(), a checkpoint, a Force's updateParametersInContext()) calls for a
+        // fit to the positions before the next step, which the notice that comes with it, or
+        // positionsAreCurrent(), brings.
+        if (impl->reordering)
+            impl->followWrapping();
+        else
+            impl->written = false;
+    }
+    Impl* impl;
+};
+
+void CommonIntegrateRigidBodyStepKernel::Impl::followWrapping() {
+    // Reordering wraps each molecule into the box, moving posq by whole box vectors. The body's centre
+    // moves by the lattice vector its first particle moved by, added exactly whatever the precision of
+    // posq; a particle of the body that moved by another one (a body spread over several molecules of
+    // the platform) is put back at its rigid place with its cell offset corrected, so that the
+    // positions the Context reports do not change.
+    if (numBodies == 0 || !cc.getNonbondedUtilities().getUsePeriodic())
+        return;
+    const bool mixed = cc.getUseMixedPrecision(), doublePrecision = cc.getUseDoublePrecision();
+    const int numAtoms = cc.getNumAtoms();
+    vector<mm_double4> positionsDouble;
+    vector<mm_float4> positionsFloat, corrections;
+    if (doublePrecision)
+        cc.getPosq().download(positionsDouble);
+    else {
+        cc.getPosq().download(positionsFloat);
+        if (mixed)
+            cc.getPosqCorrection().download(corrections);
+    }
+    auto position = [&](int i, int k) -> double {
+        if (doublePrecision)
+            return k == 0 ? positionsDouble[i].x : k == 1 ? positionsDouble[i].y : positionsDouble[i].z;
+        double x = (k == 0 ? positionsFloat[i].x : k == 1 ? positionsFloat[i].y : positionsFloat[i].z);
+        if (mixed)
+            x += (k == 0 ? corrections[i].x : k == 1 ? corrections[i].y : corrections[i].z);
+        return x;
+    };
+    vector<double> flat;
+    states.download(flat);
+    vector<int> where(numAtoms);
+    const vector<int>& order = cc.getAtomIndex();
+    for (int i = 0; i < numAtoms; i++)
+        where[order[i]] = i;
+    Vec3 box[3];
+    cc.getPeriodicBoxVectors(box[0], box[1], box[2]);
+    vector<mm_int4>& offsets = cc.getPosCellOffsets();
+    bool statesChanged = false, positionsChanged = false;
+    for (int b = 0; b < numBodies; b++) {
+        double* s = &flat[RigidBodyDynamics::StateSize*b];
+        const int n = bodies->getBodySize(b);
+        const int* members = bodies->getBodyParticles(b);
+        const Vector3* coordinates = bodies->getBodyCoordinates(b);
+        int first[3] = {0, 0, 0};
+        for (int i = 0; i < n; i++) {
+            const int index = where[members[i]];
+            double rigid[3], d[3];
+            for (int k = 0; k < 3; k++) {
+                // R + A^T b_i, A row-major lab to body
+                rigid[k] = s[k] + s[9 + k]*coordinates[i][0] + s[12 + k]*coordinates[i][1] + s[15 + k]*coordinates[i][2];
+                d[k] = position(index, k) - rigid[k];
+            }
+            int cell[3];
+            for (int axis = 2; axis >= 0; axis--) {
+                cell[axis] = (int) round(d[axis]/box[axis][axis]);
+                for (int k = 0; k <= axis; k++)
+                    d[k] -= cell[axis]*box[axis][k];
+            }
+            if (i == 0) {
+                for (int k = 0; k < 3; k++)
+                    first[k] = cell[k];
+                if (cell[0] != 0 || cell[1] != 0 || cell[2] != 0) {
+                    for (int k = 0; k < 3; k++)
+                        s[k] += cell[0]*box[0][k] + cell[1]*box[1][k] + cell[2]*box[2][k];
+                    statesChanged = true;
+                }
+            }
+            else if (cell[0] != first[0] || cell[1] != first[1] || cell[2] != first[2]) {
+                double x[3];
+                for (int k = 0; k < 3; k++)
+                    x[k] = rigid[k] + first[0]*box[0][k] + first[1]*box[1][k] + first[2]*box[2][k];
+                if (doublePrecision) {
+                    positionsDouble[index].x = x[0];
+                    positionsDouble[index].y = x[1];
+                    positionsDouble[index].z = x[2];
+                }
+                else {
+                    positionsFloat[index].x = (float) x[0];
+                    positionsFloat[index].y = (float) x[1];
+                    positionsFloat[index].z = (float) x[2];
+                    if (mixed) {
+                        corrections[index].x = (float) (x[0] - (double) positionsFloat[index].x);
+                        corrections[index].y = (float) (x[1] - (double) positionsFloat[index].y);
+                        corrections[index].z = (float) (x[2] - (double) positionsFloat[index].z);
+                    }
+                }
+                offsets[index].x += first[0] - cell[0];
+                offsets[index].y += first[1] - cell[1];
+                offsets[index].z += first[2] - cell[2];
+                positionsChanged = true;
+            }
+        }
+    }
+    if (statesChanged)
+        states.upload(flat);
+    if (positionsChanged) {
+        if (doublePrecision)
+            cc.getPosq().upload(positionsDouble);
+        else {
+            cc.getPosq().upload(positionsFloat);
+            if (mixed)
+                cc.getPosqCorrection().upload(corrections);
+        }
+    }
+}
+
+CommonIntegrateRigidBodyStepKernel::CommonIntegrateRigidBodyStepKernel(string name, const Platform& platform, ComputeContext& cc,
+                                                                       SolverFactory makeSolver) :
+        IntegrateRigidBodyStepKernel(name, platform), cc(cc), makeSolver(makeSolver) {
+}
+
+CommonIntegrateRigidBodyStepKernel::~CommonIntegrateRigidBodyStepKernel() {
+    // The ComputeContext keeps the listener (it deletes it): it must not reach this kernel any more.
+    for (auto listener : cc.getReorderListeners()) {
+        ReorderListener* ours = dynamic_cast<ReorderListener*>(listener);
+        if (ours != nullptr && impl && ours->impl == impl.get())
+            ours->impl = nullptr;
+    }
+}
+
+void CommonIntegrateRigidBodyStepKernel::initialize(ContextImpl& context, RigidBodySystem& bodies) {
+    if (!cc.getSupportsDoublePrecision())
+        throw OpenMMException(bodies.getClassName() + ": the " + getPlatform().getName() + " device does not support double "
+                "precision, which the rigid bodies' state needs in every precision mode");
+    impl.reset(new Impl(cc));
+    Impl& d = *impl;
+    d.bodies = &bodies;
+    // Before the contexts are initialized, which finds the molecules that reordering keeps together.
+    BodyInfo* info = new BodyInfo(bodies);
+    cc.addForce(info);
+    ContextSelector selector(cc);
+    cc.initializeContexts();
+    cc.invalidateMolecules(info, true, false);  // if another integrator initialized the contexts first
+    d.numBodies = bodies.getNumBodies();
+    d.numBodyParticles = bodies.getParticles().size();
+    d.numFree = bodies.getFreeParticles().size();
+    const int numAtoms = cc.getNumAtoms();
+
+    vector<int> start(d.numBodies + 1);
+    for (int b = 0; b <= d.numBodies; b++)
+        start[b] = bodies.getBodyStart(b);
+    vector<double> particleMass(max(1, d.numBodyParticles), 0.0), mass(max(1, d.numBodies), 0.0);
+    for (int i = 0; i < d.numBodyParticles; i++)
+        particleMass[i] = bodies.getMasses()[bodies.getParticles()[i]];
+    for (int b = 0; b < d.numBodies; b++)
+        mass[b] = bodies.getBodyMass(b);
+    vector<int> particles = bodies.getParticles(), free = bodies.getFreeParticles();
+    particles.resize(max(1, d.numBodyParticles), 0);
+    free.resize(max(1, d.numFree), 0);
+    d.bodyStart.initialize<int>(cc, start.size(), "rigidBodyStart");
+    d.bodyStart.upload(start);
+    d.bodyParticles.initialize<int>(cc, particles.size(), "rigidBodyParticles");
+    d.bodyParticles.upload(particles);
+    d.bodyParticleMass.initialize<double>(cc, particleMass.size(), "rigidBodyParticleMass");
+    d.bodyParticleMass.upload(particleMass);
+    d.bodyMass.initialize<double>(cc, mass.size(), "rigidBodyMass");
+    d.bodyMass.upload(mass);
+    d.freeParticles.initialize<int>(cc, free.size(), "rigidFreeParticles");
+    d.freeParticles.upload(free);
+    // Body coordinates and shapes: explicit bodies get theirs from the first positions, later; both are
+    // uploaded at each projection (uploadShapes()).
+    d.bodyCoordinates.initialize<double>(cc, 3*particles.size(), "rigidBodyCoordinates");
+    d.shapes.initialize(cc, max(1, d.numBodies), sizeof(RigidShape), "rigidBodyShapes");
+    d.states.initialize<double>(cc, RigidBodyDynamics::StateSize*max(1, d.numBodies), "rigidBodyStates");
+    d.startStates.initialize<double>(cc, d.states.getSize(), "rigidBodyStartStates");
+    d.writtenVelocities.initialize<double>(cc, 3*particles.size(), "rigidWrittenVelocities");
+    d.currentIndex.initialize<int>(cc, numAtoms, "rigidCurrentIndex");
+    d.errorCode.initialize<int>(cc, 1, "rigidErrorCode");
+    d.errorCode.upload(vector<int>(1, ErrorNone));
+    d.errorData.initialize<double>(cc, 3, "rigidErrorData");
+    d.energies.initialize<double>(cc, 2*max(1, d.numBodies + d.numFree), "rigidKineticEnergies");
+    d.sums.initialize<double>(cc, 2, "rigidKineticEnergySums");
+    d.startPosq.initialize(cc, cc.getPosq().getSize(), cc.getPosq().getElementSize(), "rigidStartPosq");
+    if (cc.getUseMixedPrecision())
+        d.startPosqCorrection.initialize(cc, cc.getPosqCorrection().getSize(), cc.getPosqCorrection().getElementSize(),
+                                         "rigidStartPosqCorrection");
+    d.startVelm.initialize(cc, cc.getVelm().getSize(), cc.getVelm().getElementSize(), "rigidStartVelm");
+
+    map<string, string> defines;
+    defines["RIGID_SUM_THREADS"] = cc.intToString(sumThreads);
+    ComputeProgram program = cc.compileProgram(CommonRigidKernelSources::core + CommonRigidKernelSources::rigidBodies, defines);
+    ArrayInterface& posq = cc.getPosq();
+    ArrayInterface& correction = d.posqCorrection();
+    ArrayInterface& velm = cc.getVelm();
+    ArrayInterface& force = cc.getLongForceBuffer();
+    const int padded = cc.getPaddedNumAtoms();
+
+    d.updateAtomOrder = program->createKernel("rigidUpdateAtomOrder");
+    d.updateAtomOrder->addArg(numAtoms);
+    d.updateAtomOrder->addArg(cc.getAtomIndexArray());
+    d.updateAtomOrder->addArg(d.currentIndex);
+
+    d.recordVelocities = program->createKernel("rigidRecordVelocities");
+    d.recordVelocities->addArg(d.numBodyParticles);
+    d.recordVelocities->addArg(d.bodyParticles);
+    d.recordVelocities->addArg(d.currentIndex);
+    d.recordVelocities->addArg(velm);
+    d.recordVelocities->addArg(d.writtenVelocities);
+
+    d.kickDrift = program->createKernel("rigidKickDrift");
+    d.kickDrift->addArg(d.numBodies);
+    for (ArrayInterface* array : initializer_list<ArrayInterface*>{&d.bodyStart, &d.bodyParticles, &d.bodyCoordinates, &d.bodyParticleMass, &d.bodyMass, &d.shapes,
+                                  &d.currentIndex, &d.states, &d.writtenVelocities, &posq, &correction, &velm, &force})
+        d.kickDrift->addArg(*array);
+    d.kickDrift->addArg(padded);
+    for (int i = 0; i < 4; i++)
+        d.kickDrift->addArg();  // kick, drift, noSquish, displacementLimit (arguments 15 to 18)
+    d.kickDrift->addArg(d.errorCode);
+    d.kickDrift->addArg(d.errorData);
+
+    d.solver.reset(bodies.getFreeConstraintSystem() != nullptr ? makeSolver(*bodies.getFreeConstraintSystem()) : nullptr);
+    d.kickDriftFree = program->createKernel("rigidKickDriftFree");
+    d.kickDriftFree->addArg(d.numFree);
+    for (ArrayInterface* array : initializer_list<ArrayInterface*>{&d.freeParticles, &d.currentIndex, &posq, &correction, &velm, &force})
+        d.kickDriftFree->addArg(*array);
+    d.kickDriftFree->addArg(padded);
+    for (int i = 0; i < 3; i++)
+        d.kickDriftFree->addArg();  // kick, drift, displacementLimit (args 8 to 10)
+    d.kickDriftFree->addArg((int) (d.solver != nullptr));
+    if (d.solver)
+        d.kickDriftFree->addArg(d.solver->getPosDelta());
+    else
+        d.kickDriftFree->addArg(velm);  // not read without constraints
+    d.kickDriftFree->addArg(d.errorCode);
+    d.kickDriftFree->addArg(d.errorData);
+
+    if (d.solver) {
+        d.finishFreeDrift = program->createKernel("rigidFinishFreeDrift");
+        d.finishFreeDrift->addArg(d.numFree);
+        for (ArrayInterface* array : initializer_list<ArrayInterface*>{&d.freeParticles, &d.currentIndex, &posq, &correction, &velm, &d.solver->getPosDelta()})
+            d.finishFreeDrift->addArg(*array);
+        d.finishFreeDrift->addArg();  // drift (7)
+        d.finishFreeDrift->addArg();  // displacementLimit (8)
+        d.finishFreeDrift->addArg(d.errorCode);
+        d.finishFreeDrift->addArg(d.errorData);
+    }
+
+    d.closingKick = program->createKernel("rigidClosingKick");
+    d.closingKick->addArg(d.numBodies);
+    for (ArrayInterface* array : initializer_list<ArrayInterface*>{&d.bodyStart, &d.bodyParticles, &d.bodyCoordinates, &d.bodyMass, &d.shapes, &d.currentIndex,
+                                  &d.states, &d.writtenVelocities, &velm, &force})
+        d.closingKick->addArg(*array);
+    d.closingKick->addArg(padded);
+    d.closingKick->addArg();  // kick (12)
+
+    d.kickFree = program->createKernel("rigidKickFree");
+    d.kickFree->addArg(d.numFree);
+    for (ArrayInterface* array : initializer_list<ArrayInterface*>{&d.freeParticles, &d.currentIndex, &velm, &force})
+        d.kickFree->addArg(*array);
+    d.kickFree->addArg(padded);
+    d.kickFree->addArg();  // kick (6)
+
+    d.thermalizeBodies = program->createKernel("rigidThermalize");
+    d.thermalizeBodies->addArg(d.numBodies);
+    d.thermalizeBodies->addArg(d.bodyMass);
+    d.thermalizeBodies->addArg(d.shapes);
+    d.thermalizeBodies->addArg(d.states);
+    for (int i = 0; i < 4; i++)
+        d.thermalizeBodies->addArg();  // c, noise, seed, counter (4 to 7)
+
+    d.thermalizeFree = program->createKernel("rigidThermalizeFree");
+    d.thermalizeFree->addArg(d.numFree);
+    d.thermalizeFree->addArg(d.numBodies);
+    d.thermalizeFree->addArg(d.freeParticles);
+    d.thermalizeFree->addArg(d.currentIndex);
+    d.thermalizeFree->addArg(velm);
+    for (int i = 0; i < 4; i++)
+        d.thermalizeFree->addArg();  // c, noise, seed, counter (5 to 8)
+
+    d.scaleBodies = program->createKernel("rigidScaleMomenta");
+    d.scaleBodies->addArg(d.numBodies);
+    for (ArrayInterface* array : initializer_list<ArrayInterface*>{&d.bodyStart, &d.bodyParticles, &d.currentIndex, &d.states, &d.writtenVelocities, &velm})
+        d.scaleBodies->addArg(*array);
+    d.scaleBodies->addArg();  // alpha (7)
+
+    d.scaleFree = program->createKernel("rigidScaleFree");
+    d.scaleFree->addArg(d.numFree);
+    d.scaleFree->addArg(d.freeParticles);
+    d.scaleFree->addArg(d.currentIndex);
+    d.scaleFree->addArg(velm);
+    d.scaleFree->addArg();  // alpha (4)
+
+    d.kineticEnergies = program->createKernel("rigidKineticEnergies");
+    d.kineticEnergies->addArg(d.numBodies);
+    d.kineticEnergies->addArg(d.numFree);
+    for (ArrayInterface* array : initializer_list<ArrayInterface*>{&d.bodyStart, &d.bodyParticles, &d.bodyParticleMass, &d.bodyMass, &d.freeParticles, &d.currentIndex,
+                                  &velm, &d.energies})
+        d.kineticEnergies->addArg(*array);
+
+    d.sumPairs = program->createKernel("rigidSumPairs");
+    d.sumPairs->addArg(d.numBodies + d.numFree);
+    d.sumPairs->addArg(d.energies);
+    d.sumPairs->addArg(d.sums);
+
+    d.rebuildAtomOrder();
+    cc.addReorderListener(new ReorderListener(impl.get()));
+    d.host.reset(new RigidBodyDynamics(bodies, nullptr, nullptr));
+    d.stateData = getPlatform().createKernel(UpdateStateDataKernel::Name(), context);
+    d.stateData.getAs<UpdateStateDataKernel>().initialize(context.getSystem());
+}
+
+void CommonIntegrateRigidBodyStepKernel::setGeometry(ContextImpl& context, const StepGeometry& geometry) {
+    impl->geometry = geometry;
+    impl->host->setGeometry(geometry);
+}
+
+void CommonIntegrateRigidBodyStepKernel::beginStep(ContextImpl& context, const StepGeometry& geometry) {
+    setGeometry(context, geometry);
+    Impl& d = *impl;
+    ContextSelector selector(cc);
+    cc.getPosq().copyTo(d.startPosq);
+    if (cc.getUseMixedPrecision())
+        cc.getPosqCorrection().copyTo(d.startPosqCorrection);
+    cc.getVelm().copyTo(d.startVelm);
+    d.states.copyTo(d.startStates);
+    d.reordersAtStepStart = d.reorders;
+}
+
+void CommonIntegrateRigidBodyStepKernel::abandonStep(ContextImpl& context) {
+    Impl& d = *impl;
+    ContextSelector selector(cc);
+    d.errorCode.upload(vector<int>(1, ErrorNone));
+    // The copies are in the atom order of the step's start: the atoms are reordered only right before
+    // the step's last force evaluation, after every stage that can fail has been checked.
+    if (d.reorders == d.reordersAtStepStart) {
+        d.startPosq.copyTo(cc.getPosq());
+        if (cc.getUseMixedPrecision())
+            d.startPosqCorrection.copyTo(cc.getPosqCorrection());
+        d.startVelm.copyTo(cc.getVelm());
+        d.startStates.copyTo(d.states);
+        context.computeVirtualSites();
+    }
+    d.written = false;
+}
+
+void CommonIntegrateRigidBodyStepKernel::project(ContextImpl& context) {
+    Impl& d = *impl;
+    ContextSelector selector(cc);
+    // The fit on the host (RigidBodyDynamics::project, as on the Reference platform): outside changes
+    // (new positions, a barostat's move, a checkpoint) are rare next to steps.
+    vector<Vec3> positions, velocities;
+    context.getPositions(positions);
+    context.getVelocities(velocities);
+    d.host->project(positions, velocities);
+    // The shapes of explicit bodies are known from the first projection on, and then never change.
+    vector<double> coordinates(d.bodyCoordinates.getSize(), 0.0);
+    for (int i = 0; i < d.numBodyParticles; i++)
+        for (int k = 0; k < 3; k++)
+            coordinates[3*i + k] = d.bodies->getBodyCoordinates()[i][k];
+    d.bodyCoordinates.upload(coordinates);
+    vector<RigidShape> shapes(d.shapes.getSize());
+    for (int b = 0; b < d.numBodies; b++)
+        shapes[b] = d.bodies->getShape(b);
+    d.shapes.upload(shapes);
+    vector<double> flat;
+    d.host->getStates(flat);
+    flat.resize(d.states.getSize(), 0.0);
+    d.states.upload(flat);
+    // A loaded checkpoint restores an atom order without a reorder: the index is rebuilt here too.
+    d.rebuildAtomOrder();
+    UpdateStateDataKernel& stateData = d.stateData.getAs<UpdateStateDataKernel>();
+    d.reordering = true;
+    try {
+        stateData.setPositions(context, positions);  // may reorder the atoms (the listener follows)
+    }
+    catch (...) {
+        d.reordering = false;
+        throw;
+    }
+    d.reordering = false;
+    stateData.setVelocities(context, velocities);
+    d.rebuildAtomOrder();
+    d.recordWrittenVelocities();
+    context.computeVirtualSites();
+    d.written = true;
+    d.writtenStep = cc.getStepCount();
+}
+
+void CommonIntegrateRigidBodyStepKernel::projectVelocities(ContextImpl& context) {
+    Impl& d = *impl;
+    ContextSelector selector(cc);
+    vector<double> flat;
+    d.states.download(flat);
+    flat.resize(RigidBodyDynamics::StateSize*d.numBodies);
+    d.host->setStates(flat);
+    vector<Vec3> velocities;
+    context.getVelocities(velocities);
+    d.host->projectVelocities(velocities);
+    d.host->getStates(flat);
+    flat.resize(d.states.getSize(), 0.0);
+    d.states.upload(flat);
+    d.stateData.getAs<UpdateStateDataKernel>().setVelocities(context, velocities);
+    d.recordWrittenVelocities();
+}
+
+bool CommonIntegrateRigidBodyStepKernel::positionsAreCurrent(ContextImpl& context) const {
+    // Whatever changes the positions through the Context sends a notice; what steps without one (the
+    // other integrator of a CompoundIntegrator) advances the step count. A comparison of the
+    // positions themselves would cost a copy from the device at every step.
+    return impl->written && impl->writtenStep == cc.getStepCount();
+}
+
+void CommonIntegrateRigidBodyStepKernel::kickAndDrift(ContextImpl& context, double kick, double drift,
+                                                      RigidBodyOptions::RotationMethod method, double constraintTolerance) {
+    Impl& d = *impl;
+    ContextSelector selector(cc);
+    const double limit = d.geometry.displacementLimit;
+    if (d.numBodies > 0) {
+        d.kickDrift->setArg(15, kick);
+        d.kickDrift->setArg(16, drift);
+        d.kickDrift->setArg(17, (int) (method == RigidBodyOptions::NoSquish));
+        d.kickDrift->setArg(18, limit);
+        d.kickDrift->execute(d.numBodies);
+    }
+    if (d.numFree > 0) {
+        d.kickDriftFree->setArg(8, kick);
+        d.kickDriftFree->setArg(9, drift);
+        d.kickDriftFree->setArg(10, limit);
+        d.kickDriftFree->execute(d.numFree);
+        if (d.solver) {
+            d.solver->applyConstraints(constraintTolerance);
+            d.finishFreeDrift->setArg(7, drift);
+            d.finishFreeDrift->setArg(8, limit);
+            d.finishFreeDrift->execute(d.numFree);
+        }
+    }
+}
+
+void CommonIntegrateRigidBodyStepKernel::closingKick(ContextImpl& context, double kick, double constraintTolerance) {
+    Impl& d = *impl;
+    ContextSelector selector(cc);
+    if (d.numBodies > 0) {
+        d.closingKick->setArg(12, kick);
+        d.closingKick->execute(d.numBodies);
+    }
+    if (d.numFree > 0 && kick != 0.0) {
+        d.kickFree->setArg(6, kick);
+        d.kickFree->execute(d.numFree);
+    }
+    if (d.solver)
+        d.solver->applyVelocityConstraints(constraintTolerance);
+}
+
+void CommonIntegrateRigidBodyStepKernel::thermalize(ContextImpl& context, double c, double kT, uint64_t seed, uint64_t counter,
+                                                    double constraintTolerance) {
+    Impl& d = *impl;
+    ContextSelector selector(cc);
+    const double noise = sqrt((1.0 - c*c)*kT);
+    if (d.numBodies > 0) {
+        d.thermalizeBodies->setArg(4, c);
+        d.thermalizeBodies->setArg(5, noise);
+        d.thermalizeBodies->setArg(6, seed);
+        d.thermalizeBodies->setArg(7, counter);
+        d.thermalizeBodies->execute(d.numBodies);
+    }
+    if (d.numFree > 0) {
+        d.thermalizeFree->setArg(5, c);
+        d.thermalizeFree->setArg(6, noise);
+        d.thermalizeFree->setArg(7, seed);
+        d.thermalizeFree->setArg(8, counter);
+        d.thermalizeFree->execute(d.numFree);
+    }
+    if (d.solver)
+        d.solver->applyVelocityConstraints(constraintTolerance);
+}
+
+void CommonIntegrateRigidBodyStepKernel::scaleMomenta(ContextImpl& context, double alpha) {
+    Impl& d = *impl;
+    ContextSelector selector(cc);
+    if (d.numBodies > 0) {
+        d.scaleBodies->setArg(7, alpha);
+        d.scaleBodies->execute(d.numBodies);
+    }
+    if (d.numFree > 0) {
+        d.scaleFree->setArg(4, alpha);
+        d.scaleFree->execute(d.numFree);
+    }
+}
+
+void CommonIntegrateRigidBodyStepKernel::computeKineticEnergies(ContextImpl& context, double& translational, double& rotational) {
+    Impl& d = *impl;
+    ContextSelector selector(cc);
+    translational = rotational = 0.0;
+    if (d.numBodies + d.numFree == 0)
+        return;
+    d.kineticEnergies->execute(d.numBodies + d.numFree);
+    d.sumPairs->execute(sumThreads, sumThreads);
+    vector<double> sums;
+    d.sums.download(sums);
+    translational = sums[0];
+    rotational = sums[1];
+}
+
+double CommonIntegrateRigidBodyStepKernel::computeKineticEnergy(ContextImpl& context) {
+    ContextSelector selector(cc);
+    return cc.getIntegrationUtilities().computeKineticEnergy(0.0);
+}
+
+void CommonIntegrateRigidBodyStepKernel::beforeLastForces(ContextImpl& context) {
+    Impl& d = *impl;
+    ContextSelector selector(cc);
+    // The one copy from the device in a step: whether a stage found the simulation unstable.
+    int code;
+    d.errorCode.download(&code);
+    if (code != ErrorNone) {
+        vector<double> data;
+        d.errorData.download(data);
+        d.errorCode.upload(vector<int>(1, ErrorNone));
+        const string& className = d.bodies->getClassName();
+        if (code == ErrorBodyNotFinite)
+            throw OpenMMException(RigidBodyDynamics::notFiniteMessage(className, (int) data[0]));
+        throw OpenMMException(RigidBodyDynamics::unstableMessage(className, code == ErrorBodyMoves ? "body" : "particle", (int) data[0],
+                                                                 data[1], data[2], d.geometry));
+    }
+    // Reordering now keeps the forces about to be computed valid for the next step's first kick.
+    d.reordering = true;
+    try {
+        cc.reorderAtoms();
+    }
+    catch (...) {
+        d.reordering = false;
+        throw;
+    }
+    d.reordering = false;
+}
+
+void CommonIntegrateRigidBodyStepKernel::finishStep(ContextImpl& context, double dt) {
+    Impl& d = *impl;
+    for (auto ctx : cc.getAllContexts()) {
+        ctx->setTime(ctx->getTime() + dt);
+        ctx->setStepCount(ctx->getStepCount() + 1);
+    }
+    d.written = true;
+    d.writtenStep = cc.getStepCount();
+}
+
+} // namespace OpenMMRigid
