@@ -9,12 +9,13 @@ source being the numerics core (its common prelude and the core files, in order)
 kernel file, as the plugin encodes them. common.cu and vectorOps.cu are read out of the installed
 libOpenMMCUDA.so, so they are exactly the ones of the OpenMM that will compile the kernels.
 
-Each source is compiled to PTX for compute_90 (what OpenMM does on a Hopper GPU; the driver
-assembles it) and to a cubin for sm_90 (the whole back end, ptxas included). Any failed compilation
-fails the script. No driver or GPU is needed: NVRTC is a library.
+Each source is compiled to a cubin for sm_90 (Hopper) by default: the whole back end, ptxas included,
+where OpenMM asks NVRTC for compute_90 PTX and leaves the assembly to the driver. Any failed
+compilation fails the script. No driver or GPU is needed: NVRTC is a library.
 
     python cuda_offline_compile.py --openmm-cuda <libOpenMMCUDA.so> --nvrtc <libnvrtc.so.13>
         --core <CorePreludeCommon.h> <CoreBasics.h> ... --kernels <kernels/*.cc> [--define NAME=VALUE ...]
+        [--arch sm_90 compute_90 ...]
 """
 
 import argparse
@@ -25,7 +26,6 @@ import sys
 import time
 
 PRECISIONS = ("single", "mixed", "double")
-ARCHITECTURES = ("compute_90", "sm_90")
 
 
 def embeddedString(blob, marker):
@@ -155,6 +155,8 @@ def main():
     parser.add_argument("--kernels", nargs="+", required=True, help="the kernel files (kernels/*.cc)")
     parser.add_argument("--define", action="append", default=[], metavar="NAME=VALUE",
                         help="a define the plugin passes to compileProgram (repeatable)")
+    parser.add_argument("--arch", nargs="+", default=["sm_90"],
+                        help="NVRTC targets: sm_XX for a cubin, compute_XX for PTX (default sm_90)")
     arguments = parser.parse_args()
 
     common, vectorOps = platformHeaders(arguments.openmm_cuda)
@@ -169,7 +171,7 @@ def main():
         parts = core + [(name, open(kernel).read())]
         for precision in PRECISIONS:
             text, starts = moduleSource(precision, common, vectorOps, kernelDefines, parts)
-            for architecture in ARCHITECTURES:
+            for architecture in arguments.arch:
                 start = time.perf_counter()
                 ok, size, log = nvrtc.compile(text, name + ".cu", [f"-arch={architecture}", "--use_fast_math"])
                 seconds = time.perf_counter() - start
@@ -179,7 +181,7 @@ def main():
                 if message:
                     print("    " + message.replace("\n", "\n    "))
                 failures += not ok
-    compiled = len(arguments.kernels) * len(PRECISIONS) * len(ARCHITECTURES)
+    compiled = len(arguments.kernels) * len(PRECISIONS) * len(arguments.arch)
     print(f"NVRTC: {compiled - failures} of {compiled} compilations succeeded")
     return 1 if failures else 0
 
