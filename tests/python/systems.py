@@ -29,11 +29,46 @@ KJ_PER_MOL_PER_NM = 138.935456  # Coulomb's constant, kJ mol^-1 nm e^-2 (OpenMM'
 BOLTZMANN = 0.00831446261815324  # kJ/mol/K
 
 
-def platform_and_properties(name):
-    """The platform and the properties the tests use with it (deterministic forces on CPU)."""
+def _has_rigid_kernels(name):
+    """Whether the platform exists here and openmmrigid registered its kernels with it."""
+    try:
+        return openmm.Platform.getPlatformByName(name).supportsKernels(["IntegrateRigidBodyStep"])
+    except Exception:
+        return False
+
+
+#: The GPU platforms (common compute) that are present with the plugin's kernels: OpenCL through PoCL
+#: on a machine without a GPU, CUDA where there is a driver.
+GPU_PLATFORMS = [name for name in ("OpenCL", "CUDA") if _has_rigid_kernels(name)]
+#: Every platform the workflow tests run on.
+PLATFORMS = ["Reference", "CPU"] + GPU_PLATFORMS
+
+
+def platform_and_properties(name, precision="double"):
+    """The platform and the properties the tests use with it (deterministic forces on CPU; a GPU
+    platform in the given precision, double unless asked)."""
     platform = openmm.Platform.getPlatformByName(name)
-    properties = {"DeterministicForces": "true"} if name == "CPU" else {}
+    if name == "CPU":
+        properties = {"DeterministicForces": "true"}
+    elif name in ("OpenCL", "CUDA"):
+        properties = {"Precision": precision}
+    else:
+        properties = {}
     return platform, properties
+
+
+def minimize(context, tolerance=10, maxIterations=100):
+    """openmm.LocalEnergyMinimizer.minimize(context, ...), done on the CPU platform for a GPU
+    platform's Context (OpenMM's minimiser crashes on PoCL's OpenCL) and the result set in context."""
+    if context.getPlatform().getName() not in ("OpenCL", "CUDA"):
+        openmm.LocalEnergyMinimizer.minimize(context, tolerance, maxIterations)
+        return
+    state = context.getState(getPositions=True)
+    helper = openmm.Context(context.getSystem(), openmm.VerletIntegrator(0.001), openmm.Platform.getPlatformByName("CPU"))
+    helper.setPeriodicBoxVectors(*state.getPeriodicBoxVectors())
+    helper.setPositions(state.getPositions())
+    openmm.LocalEnergyMinimizer.minimize(helper, tolerance, maxIterations)
+    context.setPositions(helper.getState(getPositions=True).getPositions())
 
 
 def make_context(system, integrator, platform_name):

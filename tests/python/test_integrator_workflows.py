@@ -9,8 +9,9 @@ import pytest
 from openmm import app, unit
 
 import openmmrigid
+import systems
 
-PLATFORMS = ["Reference", "CPU"]
+PLATFORMS = systems.PLATFORMS
 
 
 def water_box(edge=1.4, barostat=False, cmMotionRemover=False):
@@ -26,15 +27,15 @@ def water_box(edge=1.4, barostat=False, cmMotionRemover=False):
 
 
 def make_context(system, integrator, platformName):
-    """A Context; on CPU with deterministic force summation, so that two runs can be compared bit for bit."""
-    properties = {"DeterministicForces": "true"} if platformName == "CPU" else {}
-    return openmm.Context(system, integrator, openmm.Platform.getPlatformByName(platformName), properties)
+    """A Context; on CPU with deterministic force summation, so that two runs can be compared bit for
+    bit; on a GPU platform in double precision."""
+    return systems.make_context(system, integrator, platformName)
 
 
 def minimized_context(system, positions, integrator, platformName):
     context = make_context(system, integrator, platformName)
     context.setPositions(positions)
-    openmm.LocalEnergyMinimizer.minimize(context, 10, 100)
+    systems.minimize(context, 10, 100)
     context.setVelocitiesToTemperature(300*unit.kelvin, 5)
     return context
 
@@ -150,7 +151,7 @@ def test_dcd_reporter(platformName, tmp_path):
     modeller.addSolvent(forceField, model="tip3p", boxSize=openmm.Vec3(1.4, 1.4, 1.4)*unit.nanometer)
     simulation = app.Simulation(modeller.topology, system, integrator, openmm.Platform.getPlatformByName(platformName))
     simulation.context.setPositions(positions)
-    simulation.minimizeEnergy(maxIterations=100)
+    systems.minimize(simulation.context, 10, 100)
     path = tmp_path/"trajectory.dcd"
     simulation.reporters.append(app.DCDReporter(str(path), 5))
     simulation.step(20)

@@ -34,7 +34,7 @@ import systems
 from openmmrigid import RigidBodyIntegrator, RigidBodyLangevinIntegrator
 from systems import make_context, positions_of, velocities_of
 
-PLATFORMS = ["Reference", "CPU"]
+PLATFORMS = systems.PLATFORMS
 EDGE = 1.5  # nm, the water box
 STEP = 0.002  # ps
 DATA = pathlib.Path(__file__).resolve().parent / "data"
@@ -278,10 +278,10 @@ def test_explicit_body_shape_from_first_positions(water, platformName):
     integrator = rigid_integrator(bodies)
     shape = body_distances(water.positions, bodies)
     atoms = started(system, openmm.VerletIntegrator(STEP), platformName, water.positions)
-    openmm.LocalEnergyMinimizer.minimize(atoms, 10, 50)
+    systems.minimize(atoms, 10, 50)
     assert max_difference(body_distances(positions_of(atoms), bodies), shape) > 1e-3
     context = started(system, integrator, platformName, water.positions)
-    openmm.LocalEnergyMinimizer.minimize(context, 10, 50)
+    systems.minimize(context, 10, 50)
     integrator.step(1)
     assert max_difference(body_distances(positions_of(context), bodies), shape) < 1e-9
 
@@ -371,7 +371,9 @@ def test_constraint_solver_blow_up_raises_at_that_step(integratorClass, platform
         integrator.step(1)
         pytest.fail(f"step(1) did not raise; positions reached {np.abs(positions_of(context)).max():.3g} nm")
     message = str(error.value)
-    assert "unstable" in message and integratorClass.__name__ in message and "non-finite" in message, message
+    # The Reference and CPU solvers leave NaN there, OpenCL's SHAKE far-flung finite positions.
+    assert "unstable" in message and integratorClass.__name__ in message, message
+    assert "non-finite" in message or "would move" in message, message
     assert "particle 0" in message or "particle 1" in message, message
     # The Context is back at the state the step started from.
     assert np.array_equal(positions_of(context), before[0]) and np.array_equal(velocities_of(context), before[1])
