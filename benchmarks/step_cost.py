@@ -1,5 +1,6 @@
 #!/usr/bin/env python
-"""Wall time per step of RigidBodyIntegrator next to stock VerletIntegrator + SETTLE (CPU platform).
+"""Wall time per step of RigidBodyIntegrator next to stock VerletIntegrator + SETTLE on one platform
+(CPU by default; --platform OpenCL or CUDA, in --precision single, mixed or double).
 
 Part 1, water boxes: TIP3P and TIP4P-Ew boxes (openmm.app, PME, cutoff 0.9 nm, rigid water) of 500,
 2000 and 8000 molecules, each minimized and briefly equilibrated with a stock Langevin integrator.
@@ -19,13 +20,17 @@ with stock VerletIntegrator on the same System, shown for scale only) and Exact/
 includes the fixed cost of a step (the Python call, an empty force evaluation), spread over N bodies;
 the kinds the integrator found are checked and written to the CSV.
 
-Both parts run with one thread and with the CPU platform's default thread count (property Threads).
+On the CPU platform both parts run with one thread and with its default thread count (property
+Threads); on a GPU platform in the one precision asked for (mixed by default, as OpenMM users run).
+The states are prepared on the CPU platform either way.
 
     python benchmarks/step_cost.py            # full: about 15 to 18 minutes on 2 cores
     python benchmarks/step_cost.py --quick    # small sizes, short blocks: under 2 minutes
+    python benchmarks/step_cost.py --platform OpenCL --sizes 2000 --models tip4pew --only boxes
 
 Writes benchmarks/results/step_cost.csv, integrator_only.csv, step_cost.png and step_cost.log (a
-copy of what is printed).
+copy of what is printed); on a GPU platform with its name and precision in each file name
+(step_cost_OpenCL_mixed.csv, ...).
 """
 
 import argparse
@@ -57,6 +62,7 @@ import matplotlib.ticker  # noqa: E402
 ROOT = Path(__file__).resolve().parent.parent
 RESULTS = ROOT / "benchmarks" / "results"
 STEP = 2*unit.femtosecond
+PLATFORM_NAME = ["CPU"]  # the platform timed, for the tables (set by main)
 CUTOFF = 0.9*unit.nanometer
 TEMPERATURE = 300*unit.kelvin
 MODEL_NAMES = {"tip3p": "TIP3P", "tip4pew": "TIP4P-Ew"}
@@ -110,7 +116,7 @@ def printHeader(args, cpu):
     say(f"command:   {shlex.join([sys.executable] + sys.argv)}")
     say(f"date:      {datetime.datetime.now().astimezone():%Y-%m-%d %H:%M:%S %Z}")
     say(f"machine:   {processorName()}, {pyplatform.machine()}, os.cpu_count() = {os.cpu_count()}, "
-        f"CPU platform default Threads = {cpu.getPropertyDefaultValue('Threads')}")
+        f"CPU platform default Threads = {openmm.Platform.getPlatformByName('CPU').getPropertyDefaultValue('Threads')}")
     say(f"software:  OpenMM {openmm.version.full_version} (Platform.getOpenMMVersion {openmm.Platform.getOpenMMVersion()}), "
         f"openmmrigid {openmmrigid.__version__}")
     say(f"plugin:    {Path(openmmrigid.__file__).parent} ({libraryStamp()}); source tree git {gitDescription()}")
@@ -121,8 +127,18 @@ def printHeader(args, cpu):
 
 
 def threadProperties(threads):
-    """Context properties for a thread count (a 'default' entry has become the platform's default)."""
+    """Context properties for a thread count (a 'default' entry has become the platform's default), or
+    for a GPU platform (whose 'threads' entry is its precision)."""
+    if threads in ("single", "mixed", "double"):
+        return {"Precision": threads}
     return {"Threads": threads}
+
+
+def threadsOf(platform, context):
+    """The CPU platform's thread count of a Context, or a GPU platform's precision."""
+    if platform.getName() == "CPU":
+        return int(platform.getPropertyValue(context, "Threads"))
+    return platform.getPropertyValue(context, "Precision")
 
 
 def parseArguments():
@@ -142,6 +158,10 @@ def parseArguments():
                              "chooses it (default: 1 default; a count given twice runs once)")
     parser.add_argument("--bodies", type=int, default=8000, help="bodies per kind in part 2 (default 8000)")
     parser.add_argument("--only", choices=["boxes", "bodies"], help="run only part 1 (boxes) or part 2 (bodies)")
+    parser.add_argument("--platform", default="CPU", choices=["CPU", "OpenCL", "CUDA"],
+                        help="the platform of every timed Context (default CPU)")
+    parser.add_argument("--precision", default="mixed", choices=["single", "mixed", "double"],
+                        help="a GPU platform's precision (default mixed)")
     args = parser.parse_args()
     args.sizes = args.sizes or ([250, 500] if args.quick else [500, 2000, 8000])
     args.models = args.models or ["tip3p", "tip4pew"]
@@ -240,14 +260,14 @@ def boxIntegrators():
 
 
 def measureBox(model, molecules, system, state, cpu, threads, args):
-    """One row per integrator for this box and thread setting."""
+    """One row per integrator for this box and thread setting (cpu: the platform timed)."""
     integrators = boxIntegrators()
     contexts = []
     for integrator in integrators.values():
         context = openmm.Context(system, integrator, cpu, threadProperties(threads))
         context.setState(state)
         contexts.append(context)
-    actualThreads = int(cpu.getPropertyValue(contexts[0], "Threads"))
+    actualThreads = threadsOf(cpu, contexts[0])
     bodies = integrators[EXACT].getNumBodies()
     if bodies != molecules:
         say(f"  WARNING: RigidBodyIntegrator found {bodies} bodies in {molecules} waters")
@@ -277,7 +297,8 @@ def runBoxes(args, cpu):
             started = time.perf_counter()
             modeller, system = buildBox(model, molecules)
             waters = modeller.topology.getNumResidues()
-            state = equilibratedState(modeller, system, cpu, args.equilibrationSteps, args.minimizeIterations)
+            state = equilibratedState(modeller, system, openmm.Platform.getPlatformByName("CPU"), args.equilibrationSteps,
+                                      args.minimizeIterations)
             stamp(f"  {waters} waters, {system.getNumParticles()} particles; ready in {time.perf_counter() - started:.0f} s")
             for threads in args.threads:
                 rows.extend(measureBox(model, waters, system, state, cpu, threads, args))
@@ -285,7 +306,7 @@ def runBoxes(args, cpu):
 
 
 def printBoxTable(rows):
-    say("\nPart 1: water boxes, PME (cutoff 0.9 nm), 2 fs, CPU platform; median ms/step (ratio to stock)")
+    say(f"\nPart 1: water boxes, PME (cutoff 0.9 nm), 2 fs, {PLATFORM_NAME[0]} platform; median ms/step (ratio to stock)")
     say(f"{'model':<10}{'molecules':>10}{'threads':>8}{'stock':>10}{'Exact':>10}{'NoSquish':>10}"
         f"{'Exact/stock':>13}{'NoSq/stock':>12}")
     for key in sorted({(r["model"], r["molecules"], r["threads"]) for r in rows},
@@ -390,7 +411,7 @@ def measureKind(kind, cpu, threads, args):
         context.setPositions(positions)
         context.setVelocitiesToTemperature(TEMPERATURE, 7)
         contexts.append(context)
-    actualThreads = int(cpu.getPropertyValue(contexts[0], "Threads"))
+    actualThreads = threadsOf(cpu, contexts[0])
     steps = blockSteps(integrators["Exact"], args.body_steps, args.seconds/2, 10)  # steadier than the boxes
     times = timeInterleaved(integrators, steps, args.repetitions)
     kinds = foundKinds(integrators["Exact"], BODY_KINDS[kind][3], kind)
@@ -421,7 +442,7 @@ def runBodies(args, cpu):
 
 
 def printBodyTable(rows):
-    say("\nPart 2: integrator alone (System with no forces), 2 fs, CPU platform; median ns/body/step")
+    say(f"\nPart 2: integrator alone (System with no forces), 2 fs, {PLATFORM_NAME[0]} platform; median ns/body/step")
     say(f"{'kind':<36}{'bodies':>8}{'threads':>8}{'Exact':>10}{'NoSquish':>10}{'Exact/NoSq':>12}{'(stock)':>10}")
     for kind in BODY_KINDS:
         for threads in sorted({r["threads"] for r in rows if r["kind"] == kind}):
@@ -503,10 +524,15 @@ def plot(path, boxRows, bodyRows, title):
 def main():
     args = parseArguments()
     RESULTS.mkdir(parents=True, exist_ok=True)
-    openLog(RESULTS / "step_cost.log")
-    cpu = openmm.Platform.getPlatformByName("CPU")
-    default = cpu.getPropertyDefaultValue("Threads")
-    args.threads = list(dict.fromkeys(default if t == "default" else str(int(t)) for t in args.threads))
+    suffix = "" if args.platform == "CPU" else f"_{args.platform}_{args.precision}"
+    openLog(RESULTS / f"step_cost{suffix}.log")
+    cpu = openmm.Platform.getPlatformByName(args.platform)  # the platform timed
+    if args.platform == "CPU":
+        default = cpu.getPropertyDefaultValue("Threads")
+        args.threads = list(dict.fromkeys(default if t == "default" else str(int(t)) for t in args.threads))
+    else:
+        args.threads = [args.precision]
+    PLATFORM_NAME[0] = args.platform if args.platform == "CPU" else f"{args.platform} ({args.precision} precision)"
     printHeader(args, cpu)
     start = time.perf_counter()
     boxRows = runBoxes(args, cpu) if args.only != "bodies" else []
@@ -517,11 +543,11 @@ def main():
         printBodyTable(bodyRows)
     say()
     if boxRows:
-        writeCsv(RESULTS / "step_cost.csv", boxRows)
+        writeCsv(RESULTS / f"step_cost{suffix}.csv", boxRows)
     if bodyRows:
-        writeCsv(RESULTS / "integrator_only.csv", bodyRows)
-    plot(RESULTS / "step_cost.png", boxRows, bodyRows,
-         f"openmm-rigid step cost, {processorName()}, {os.cpu_count()} CPUs, OpenMM {openmm.version.full_version}, "
+        writeCsv(RESULTS / f"integrator_only{suffix}.csv", bodyRows)
+    plot(RESULTS / f"step_cost{suffix}.png", boxRows, bodyRows,
+         f"openmm-rigid step cost, {args.platform}{' ' + args.precision if suffix else ''}, {processorName()}, {os.cpu_count()} CPUs, OpenMM {openmm.version.full_version}, "
          f"{datetime.date.today()}{' (quick)' if args.quick else ''}")
     say(f"total {time.perf_counter() - start:.0f} s; load average now {loadAverage()}")
 
