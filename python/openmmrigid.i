@@ -64,3 +64,22 @@ RigidBodyIntegrator* asRigidBodyIntegrator(OpenMM::Integrator* integrator);
 RigidBodyLangevinIntegrator* asRigidBodyLangevinIntegrator(OpenMM::Integrator* integrator);
 } // namespace Python
 } // namespace OpenMMRigid
+
+// Which platforms have the kernels (openmmrigid.getSupportedPlatforms()), and the message for those
+// that have none (called once the plugins are loaded, by openmmrigid/integrator.py).
+%{
+#include "PlatformSupport.h"
+%}
+%typemap(out) std::vector<std::string> {
+    const std::vector<std::string>& names = $1;
+    $result = PyList_New(names.size());
+    for (size_t i = 0; i < names.size(); i++)
+        PyList_SetItem($result, i, PyUnicode_FromString(names[i].c_str()));
+}
+%feature("docstring") OpenMMRigid::getSupportedPlatforms "getSupportedPlatforms() -> list of str
+
+The names of the platforms that have the rigid-body integrators' kernels in this installation
+(e.g. ['Reference', 'CPU', 'OpenCL']): a Context with a RigidBodyIntegrator or
+RigidBodyLangevinIntegrator can be created on each. For CUDA, install openmm-rigid[cuda13].";
+%rename(_explainUnsupportedPlatforms) OpenMMRigid::explainUnsupportedPlatforms;
+%include "PlatformSupport.h"

@@ -122,11 +122,27 @@ void RigidBodyIntegratorBase::initialize(ContextImpl& contextRef) {
         throw OpenMMException("This Integrator is already bound to a context");
     context = &contextRef;
     owner = &contextRef.getOwner();
-    topology.reset(new RigidBodySystem(contextRef.getSystem(), bodies, explicitBodies, className));
-    kernel = context->getPlatform().createKernel(IntegrateRigidBodyStepKernel::Name(), contextRef);
-    kernel.getAs<IntegrateRigidBodyStepKernel>().initialize(contextRef, *topology);
-    if (explicitBodies)
-        RigidBodyMoleculesImpl::install(contextRef, bodies, className);
+    try {
+        topology.reset(new RigidBodySystem(contextRef.getSystem(), bodies, explicitBodies, className));
+        try {
+            kernel = context->getPlatform().createKernel(IntegrateRigidBodyStepKernel::Name(), contextRef);
+        }
+        catch (const OpenMMException& e) {
+            // A platform without the kernels (see explainUnsupportedPlatforms()), or one that cannot make them.
+            throw OpenMMException(className + ": " + e.what());
+        }
+        kernel.getAs<IntegrateRigidBodyStepKernel>().initialize(contextRef, *topology);
+        if (explicitBodies)
+            RigidBodyMoleculesImpl::install(contextRef, bodies, className);
+    }
+    catch (...) {
+        // The Context was not made: the integrator stays free for another one.
+        kernel = Kernel();
+        topology.reset();
+        context = NULL;
+        owner = NULL;
+        throw;
+    }
     stepState = StepState();
     stepState.seed = chooseRandomSeed(getRequestedSeed());
     bound = true;

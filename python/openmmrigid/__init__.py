@@ -22,6 +22,9 @@ rigidBodiesFromTopology
     The bodies (lists of particle indices) of the selected residues of an ``openmm.app.Topology``.
 removeIntraBodyInteractions
     A copy of a System without the bonded terms, nonbonded pairs and constraints inside each body.
+getSupportedPlatforms
+    The platforms that have the integrators' kernels here (Reference, CPU, and OpenCL and CUDA where
+    their plugins are installed); pluginLoadFailures says why a GPU plugin present did not load.
 deserializeIntegrator
     A RigidBodyIntegrator or RigidBodyLangevinIntegrator from XML (``openmm.XmlSerializer.deserialize`` does the same).
 FreeRotor
@@ -34,7 +37,8 @@ from importlib.metadata import PackageNotFoundError, version as _distributionVer
 
 from . import special
 from .freerotor import FreeRotor
-from .integrator import RigidBodyIntegrator, RigidBodyIntegratorBase, RigidBodyLangevinIntegrator, deserializeIntegrator
+from .integrator import (RigidBodyIntegrator, RigidBodyIntegratorBase, RigidBodyLangevinIntegrator, deserializeIntegrator,
+                         getSupportedPlatforms, pluginLoadFailures)
 from .intrabody import removeIntraBodyInteractions
 from .reporters import RigidStateDataReporter
 from .topology import rigidBodiesFromTopology
@@ -44,5 +48,5 @@ try:
 except PackageNotFoundError:  # imported from a source tree that was never installed
     __version__ = "unknown"
 
-__all__ = ["RigidBodyIntegrator", "RigidBodyLangevinIntegrator", "RigidBodyIntegratorBase", "RigidStateDataReporter", "deserializeIntegrator", "FreeRotor", "special",
+__all__ = ["getSupportedPlatforms", "pluginLoadFailures", "RigidBodyIntegrator", "RigidBodyLangevinIntegrator", "RigidBodyIntegratorBase", "RigidStateDataReporter", "deserializeIntegrator", "FreeRotor", "special",
            "rigidBodiesFromTopology", "removeIntraBodyInteractions", "__version__"]

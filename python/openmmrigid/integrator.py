@@ -26,11 +26,13 @@ import openmm
 
 from . import openmmrigid as _swig
 
-__all__ = ["RigidBodyIntegrator", "RigidBodyLangevinIntegrator", "RigidBodyIntegratorBase", "deserializeIntegrator"]
+__all__ = ["RigidBodyIntegrator", "RigidBodyLangevinIntegrator", "RigidBodyIntegratorBase", "deserializeIntegrator",
+           "getSupportedPlatforms", "pluginLoadFailures"]
 
 RigidBodyIntegratorBase = _swig.RigidBodyIntegratorBase
 RigidBodyIntegrator = _swig.RigidBodyIntegrator
 RigidBodyLangevinIntegrator = _swig.RigidBodyLangevinIntegrator
+getSupportedPlatforms = _swig.getSupportedPlatforms
 
 _KERNEL_NAME = "IntegrateRigidBodyStep"
 
@@ -80,6 +82,8 @@ def _loadKernels():
             openmm.Platform.loadPluginLibrary(path)
         except Exception as error:
             pluginLoadFailures[platformName] = f"{path}: {error}"
+    # A Context on a platform still without kernels fails with a message that says which have them.
+    _swig._explainUnsupportedPlatforms()
 
 
 def _mostDerived(integrator):
