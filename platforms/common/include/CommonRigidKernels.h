@@ -50,6 +50,8 @@ public:
     void beforeLastForces(OpenMM::ContextImpl& context) override;
     void finishStep(OpenMM::ContextImpl& context, double dt) override;
 private:
+    /** The rigid projection of every body's velocities on the device; false if some were not finite (nothing is written for those bodies). */
+    bool projectVelocitiesOnDevice(OpenMM::ContextImpl& context);
     class ReorderListener;
     class BodyInfo;
     struct Impl;

@@ -78,7 +78,10 @@ struct CommonIntegrateRigidBodyStepKernel::Impl {
     ComputeArray currentIndex, states, writtenVelocities, errorCode, errorData, energies, sums;
     ComputeArray startStates, startPosq, startPosqCorrection, startVelm;
     ComputeKernel updateAtomOrder, recordVelocities, kickDrift, kickDriftFree, finishFreeDrift, closingKick, kickFree;
-    ComputeKernel thermalizeBodies, thermalizeFree, scaleBodies, scaleFree, kineticEnergies, sumPairs;
+    ComputeKernel thermalizeBodies, thermalizeFree, scaleBodies, scaleFree, kineticEnergies, sumPairs, fitTranslation;
+    ComputeKernel projectBodyVelocities;
+    /** Set by rigidFitTranslation for a body that did not move as one translation. */
+    ComputeArray notRigid;
     /** How many times the atoms were reordered, and the count when the step began. */
     int reorders = 0, reordersAtStepStart = 0;
     /** Whether this kernel is reordering the atoms (its own call of reorderAtoms(), or a projection's setPositions()). */
@@ -416,6 +419,23 @@ void CommonIntegrateRigidBodyStepKernel::initialize(ContextImpl& context, RigidB
     d.sumPairs->addArg(d.energies);
     d.sumPairs->addArg(d.sums);
 
+    d.notRigid.initialize<int>(cc, 1, "rigidNotRigid");
+    d.fitTranslation = program->createKernel("rigidFitTranslation");
+    d.fitTranslation->addArg(d.numBodies);
+    for (ArrayInterface* array : initializer_list<ArrayInterface*>{&d.bodyStart, &d.bodyParticles, &d.bodyCoordinates,
+                                  &d.bodyParticleMass, &d.bodyMass, &d.currentIndex, &d.states, &posq, &correction})
+        d.fitTranslation->addArg(*array);
+    // What a translation may leave of a rigid shape: rounding to the precision of the positions.
+    d.fitTranslation->addArg(cc.getUseDoublePrecision() ? 1e-9 : 1e-5);
+    d.fitTranslation->addArg(d.notRigid);
+
+    d.projectBodyVelocities = program->createKernel("rigidProjectVelocities");
+    d.projectBodyVelocities->addArg(d.numBodies);
+    for (ArrayInterface* array : initializer_list<ArrayInterface*>{&d.bodyStart, &d.bodyParticles, &d.bodyCoordinates,
+                                  &d.bodyParticleMass, &d.bodyMass, &d.shapes, &d.currentIndex, &d.states, &d.writtenVelocities,
+                                  &velm, &d.notRigid})
+        d.projectBodyVelocities->addArg(*array);
+
     d.rebuildAtomOrder();
     cc.addReorderListener(new ReorderListener(impl.get()));
     d.host.reset(new RigidBodyDynamics(bodies, nullptr, nullptr));
@@ -460,6 +480,19 @@ void CommonIntegrateRigidBodyStepKernel::abandonStep(ContextImpl& context) {
 void CommonIntegrateRigidBodyStepKernel::project(ContextImpl& context) {
     Impl& d = *impl;
     ContextSelector selector(cc);
+    // Positions that moved each body by one translation since the kernel wrote them (a barostat's
+    // move, every few steps): the fit is done on the device. Anything else is fitted on the host.
+    if (d.written && d.numBodies > 0) {
+        d.notRigid.upload(vector<int>(1, 0));
+        d.fitTranslation->execute(d.numBodies);
+        int notRigid;
+        d.notRigid.download(&notRigid);
+        if (!notRigid && projectVelocitiesOnDevice(context)) {
+            context.computeVirtualSites();
+            d.writtenStep = cc.getStepCount();
+            return;
+        }
+    }
     // The fit on the host (RigidBodyDynamics::project, as on the Reference platform): outside changes
     // (new positions, a barostat's move, a checkpoint) are rare next to steps.
     vector<Vec3> positions, velocities;
@@ -500,9 +533,23 @@ void CommonIntegrateRigidBodyStepKernel::project(ContextImpl& context) {
     d.writtenStep = cc.getStepCount();
 }
 
+bool CommonIntegrateRigidBodyStepKernel::projectVelocitiesOnDevice(ContextImpl& context) {
+    Impl& d = *impl;
+    if (d.numBodies == 0)
+        return true;
+    d.notRigid.upload(vector<int>(1, 0));
+    d.projectBodyVelocities->execute(d.numBodies);
+    int notFinite;
+    d.notRigid.download(&notFinite);
+    return !notFinite;
+}
+
 void CommonIntegrateRigidBodyStepKernel::projectVelocities(ContextImpl& context) {
     Impl& d = *impl;
     ContextSelector selector(cc);
+    if (projectVelocitiesOnDevice(context))
+        return;
+    // A non-finite velocity: the host's projection says which particle has it.
     vector<double> flat;
     d.states.download(flat);
     flat.resize(RigidBodyDynamics::StateSize*d.numBodies);
@@ -510,11 +557,6 @@ void CommonIntegrateRigidBodyStepKernel::projectVelocities(ContextImpl& context)
     vector<Vec3> velocities;
     context.getVelocities(velocities);
     d.host->projectVelocities(velocities);
-    d.host->getStates(flat);
-    flat.resize(d.states.getSize(), 0.0);
-    d.states.upload(flat);
-    d.stateData.getAs<UpdateStateDataKernel>().setVelocities(context, velocities);
-    d.recordWrittenVelocities();
 }
 
 bool CommonIntegrateRigidBodyStepKernel::positionsAreCurrent(ContextImpl& context) const {

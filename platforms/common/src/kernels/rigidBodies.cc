@@ -558,3 +558,110 @@ KERNEL void rigidSumPairs(int count, GLOBAL const double* RESTRICT values, GLOBA
         sums[1] = second[0];
     }
 }
+
+/*
+ * A projection without the host, for positions moved by a rigid translation of each body (a Monte
+ * Carlo barostat moves every molecule by the scaled displacement of its centre): the centre moves by
+ * the mass-weighted mean displacement of the body's particles from where the body had them, and the
+ * particles are put at the moved rigid positions. A body whose particles moved otherwise than by one
+ * translation (by more than `tolerance` nm) sets *notRigid and is left as it is: the host fits
+ * every body then.
+ */
+KERNEL void rigidFitTranslation(int numBodies, GLOBAL const int* RESTRICT bodyStart, GLOBAL const int* RESTRICT bodyParticles,
+        GLOBAL const double* RESTRICT bodyCoordinates, GLOBAL const double* RESTRICT bodyParticleMass,
+        GLOBAL const double* RESTRICT bodyMass, GLOBAL const int* RESTRICT currentIndex, GLOBAL double* RESTRICT states,
+        GLOBAL real4* posq, GLOBAL real4* posqCorrection, double tolerance, GLOBAL int* notRigid) {
+    for (int b = GLOBAL_ID; b < numBodies; b += GLOBAL_SIZE) {
+        RigidBodyState s;
+        double arm[3], x[3], shift[3] = {0.0, 0.0, 0.0};
+        int i, k;
+        const int start = bodyStart[b], end = bodyStart[b + 1];
+        rigidLoadState(states, b, &s);
+        for (i = start; i < end; i++) {
+            rigidArm(&s, bodyCoordinates, i, arm);
+            rigidReadPosition(posq, posqCorrection, currentIndex[bodyParticles[i]], x);
+            for (k = 0; k < 3; k++)
+                shift[k] += bodyParticleMass[i]*(x[k] - s.r[k] - arm[k]);
+        }
+        for (k = 0; k < 3; k++)
+            shift[k] /= bodyMass[b];
+        int rigid = isfinite(shift[0] + shift[1] + shift[2]);
+        for (i = start; i < end && rigid; i++) {
+            rigidArm(&s, bodyCoordinates, i, arm);
+            rigidReadPosition(posq, posqCorrection, currentIndex[bodyParticles[i]], x);
+            for (k = 0; k < 3; k++)
+                rigid = rigid && fabs(x[k] - (s.r[k] + shift[k] + arm[k])) <= tolerance;
+        }
+        if (!rigid) {
+            notRigid[0] = 1;
+            continue;
+        }
+        for (k = 0; k < 3; k++)
+            s.r[k] += shift[k];
+        for (i = start; i < end; i++) {
+            rigidArm(&s, bodyCoordinates, i, arm);
+            for (k = 0; k < 3; k++)
+                x[k] = s.r[k] + arm[k];
+            rigidWritePosition(posq, posqCorrection, currentIndex[bodyParticles[i]], x);
+        }
+        rigidStoreState(states, b, &s);
+    }
+}
+
+/*
+ * RigidBodyDynamics::projectVelocities: each body's particle velocities replaced by the rigid motion
+ * with their linear and angular momentum about the body as it is placed, v_i = V + omega x A^T b_i,
+ * and recorded as written.
+ */
+KERNEL void rigidProjectVelocities(int numBodies, GLOBAL const int* RESTRICT bodyStart, GLOBAL const int* RESTRICT bodyParticles,
+        GLOBAL const double* RESTRICT bodyCoordinates, GLOBAL const double* RESTRICT bodyParticleMass,
+        GLOBAL const double* RESTRICT bodyMass, GLOBAL const RigidShape* RESTRICT shapes, GLOBAL const int* RESTRICT currentIndex,
+        GLOBAL double* RESTRICT states, GLOBAL double* RESTRICT writtenVelocities, GLOBAL mixed4* RESTRICT velm,
+        GLOBAL int* notFinite) {
+    for (int b = GLOBAL_ID; b < numBodies; b += GLOBAL_SIZE) {
+        RigidBodyState s;
+        RigidShape shape = shapes[b];
+        double arm[3], v[3], moment[3], omega[3], com[3] = {0.0, 0.0, 0.0}, l[3] = {0.0, 0.0, 0.0};
+        int i, k;
+        const int start = bodyStart[b], end = bodyStart[b + 1];
+        rigidLoadState(states, b, &s);
+        for (i = start; i < end; i++) {
+            rigidReadVelocity(velm, currentIndex[bodyParticles[i]], v);
+            for (k = 0; k < 3; k++)
+                com[k] += bodyParticleMass[i]*v[k];
+        }
+        for (k = 0; k < 3; k++)
+            com[k] /= bodyMass[b];
+        for (i = start; i < end; i++) {
+            rigidReadVelocity(velm, currentIndex[bodyParticles[i]], v);
+            rigidArm(&s, bodyCoordinates, i, arm);
+            for (k = 0; k < 3; k++)
+                v[k] -= com[k];
+            rigidCross(arm, v, moment);
+            for (k = 0; k < 3; k++)
+                l[k] += bodyParticleMass[i]*moment[k];
+        }
+        if (!isfinite(com[0] + com[1] + com[2] + l[0] + l[1] + l[2])) {
+            notFinite[0] = 1;
+            continue;
+        }
+        for (k = 0; k < 3; k++) {
+            s.v[k] = com[k];
+            s.l[k] = l[k];
+        }
+        rigidLabAngularVelocity(&s, &shape, omega);
+        for (i = start; i < end; i++) {
+            const int index = currentIndex[bodyParticles[i]];
+            rigidArm(&s, bodyCoordinates, i, arm);
+            rigidCross(omega, arm, v);
+            for (k = 0; k < 3; k++)
+                v[k] += s.v[k];
+            rigidWriteVelocity(velm, index, v);
+            rigidReadVelocity(velm, index, v);
+            writtenVelocities[3*i] = v[0];
+            writtenVelocities[3*i + 1] = v[1];
+            writtenVelocities[3*i + 2] = v[2];
+        }
+        rigidStoreState(states, b, &s);
+    }
+}
