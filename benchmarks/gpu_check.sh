@@ -99,7 +99,7 @@ phase pytest 240 "$python" -m pytest tests/python -q -k "cuda or opencl" -p no:c
 # 4. The step-cost benchmark on CUDA; its results beside the logs.
 reserve=0
 # shellcheck disable=SC2086 # STEP_COST_ARGS is a list of arguments
-phase step_cost 300 "$python" benchmarks/step_cost.py --platform CUDA ${STEP_COST_ARGS:-} || true
+phase step_cost 300 "$python" benchmarks/step_cost.py --platform CUDA --precision mixed ${STEP_COST_ARGS:---sizes 2000 20000 --models tip4pew --seconds 1} || true
 cp -r benchmarks/results "$logs/results" 2>/dev/null || true
 
 cat "$summary"
