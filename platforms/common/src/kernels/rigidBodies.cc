@@ -143,6 +143,85 @@ DEVICE void rigidReportError(GLOBAL int* errorCode, GLOBAL double* errorData, in
     }
 }
 
+/* The particles of a body (start to end in bodyParticles) placed at R + A^T b_i. */
+DEVICE void rigidPlaceParticles(RigidBodyState* s, GLOBAL const double* bodyCoordinates, GLOBAL const int* bodyParticles,
+        GLOBAL const int* currentIndex, int start, int end, GLOBAL real4* posq, GLOBAL real4* posqCorrection) {
+    double arm[3], x[3];
+    int i, k;
+    for (i = start; i < end; i++) {
+        rigidArm(s, bodyCoordinates, i, arm);
+        for (k = 0; k < 3; k++)
+            x[k] = s->r[k] + arm[k];
+        rigidWritePosition(posq, posqCorrection, currentIndex[bodyParticles[i]], x);
+    }
+}
+
+/* The centre-of-mass velocity V and the angular momentum L = sum m_i A^T b_i x (v_i - V) of a body's particle velocities. */
+DEVICE void rigidMomentaOfParticles(RigidBodyState* s, GLOBAL const double* bodyCoordinates, GLOBAL const int* bodyParticles,
+        GLOBAL const double* bodyParticleMass, double mass, GLOBAL const int* currentIndex, int start, int end,
+        GLOBAL const mixed4* velm, double* com, double* l) {
+    double arm[3], v[3], moment[3];
+    int i, k;
+    for (k = 0; k < 3; k++)
+        com[k] = l[k] = 0.0;
+    for (i = start; i < end; i++) {
+        rigidReadVelocity(velm, currentIndex[bodyParticles[i]], v);
+        for (k = 0; k < 3; k++)
+            com[k] += bodyParticleMass[i]*v[k];
+    }
+    for (k = 0; k < 3; k++)
+        com[k] /= mass;
+    for (i = start; i < end; i++) {
+        rigidReadVelocity(velm, currentIndex[bodyParticles[i]], v);
+        rigidArm(s, bodyCoordinates, i, arm);
+        for (k = 0; k < 3; k++)
+            v[k] -= com[k];
+        rigidCross(arm, v, moment);
+        for (k = 0; k < 3; k++)
+            l[k] += moment[k]*bodyParticleMass[i];
+    }
+}
+
+/* The total force and the torque about the centre, sum A^T b_i x f_i, on a body. */
+DEVICE void rigidForceAndTorque(RigidBodyState* s, GLOBAL const double* bodyCoordinates, GLOBAL const int* bodyParticles,
+        GLOBAL const int* currentIndex, int start, int end, GLOBAL const mm_long* force, int paddedNumAtoms, double* total,
+        double* torque) {
+    double arm[3], f[3], t[3];
+    int i, k;
+    for (k = 0; k < 3; k++)
+        total[k] = torque[k] = 0.0;
+    for (i = start; i < end; i++) {
+        rigidReadForce(force, paddedNumAtoms, currentIndex[bodyParticles[i]], f);
+        rigidArm(s, bodyCoordinates, i, arm);
+        rigidCross(arm, f, t);
+        for (k = 0; k < 3; k++) {
+            total[k] += f[k];
+            torque[k] += t[k];
+        }
+    }
+}
+
+/* The rigid velocities v_i = V + omega x A^T b_i written to a body's particles, and recorded as written (as stored). */
+DEVICE void rigidWriteRigidVelocities(RigidBodyState* s, const RigidShape* shape, GLOBAL const double* bodyCoordinates,
+        GLOBAL const int* bodyParticles, GLOBAL const int* currentIndex, int start, int end, GLOBAL mixed4* velm,
+        GLOBAL double* writtenVelocities) {
+    double arm[3], omega[3], v[3];
+    int i, k;
+    rigidLabAngularVelocity(s, shape, omega);
+    for (i = start; i < end; i++) {
+        const int index = currentIndex[bodyParticles[i]];
+        rigidArm(s, bodyCoordinates, i, arm);
+        rigidCross(omega, arm, v);
+        for (k = 0; k < 3; k++)
+            v[k] += s->v[k];
+        rigidWriteVelocity(velm, index, v);
+        rigidReadVelocity(velm, index, v);  /* in single precision velm holds floats */
+        writtenVelocities[3*i] = v[0];
+        writtenVelocities[3*i + 1] = v[1];
+        writtenVelocities[3*i + 2] = v[2];
+    }
+}
+
 /* Not "distance > limit": a NaN distance fails too (RigidBodyDynamics::checkDisplacement). */
 DEVICE int rigidDisplacementOk(double distance, double limit) {
     return distance <= limit && isfinite(distance);
@@ -181,7 +260,7 @@ KERNEL void rigidKickDrift(int numBodies, GLOBAL const int* RESTRICT bodyStart, 
     for (int b = GLOBAL_ID; b < numBodies; b += GLOBAL_SIZE) {
         RigidBodyState s;
         RigidShape shape = shapes[b];
-        double arm[3], v[3], f[3], t[3], moment[3];
+        double v[3];
         int i, k;
         const int start = bodyStart[b], end = bodyStart[b + 1];
         const double mass = bodyMass[b];
@@ -193,42 +272,17 @@ KERNEL void rigidKickDrift(int numBodies, GLOBAL const int* RESTRICT bodyStart, 
             changed = (v[0] != writtenVelocities[3*i] || v[1] != writtenVelocities[3*i + 1] || v[2] != writtenVelocities[3*i + 2]);
         }
         if (changed) {
-            double com[3] = {0.0, 0.0, 0.0}, l[3] = {0.0, 0.0, 0.0};
-            for (i = start; i < end; i++) {
-                rigidReadVelocity(velm, currentIndex[bodyParticles[i]], v);
-                for (k = 0; k < 3; k++)
-                    com[k] += bodyParticleMass[i]*v[k];
-            }
-            for (k = 0; k < 3; k++)
-                com[k] /= mass;
             for (i = start; i < end; i++) {
                 rigidReadVelocity(velm, currentIndex[bodyParticles[i]], v);
                 writtenVelocities[3*i] = v[0];
                 writtenVelocities[3*i + 1] = v[1];
                 writtenVelocities[3*i + 2] = v[2];
-                rigidArm(&s, bodyCoordinates, i, arm);
-                for (k = 0; k < 3; k++)
-                    v[k] -= com[k];
-                rigidCross(arm, v, moment);
-                for (k = 0; k < 3; k++)
-                    l[k] += moment[k]*bodyParticleMass[i];
             }
-            for (k = 0; k < 3; k++) {
-                s.v[k] = com[k];
-                s.l[k] = l[k];
-            }
+            rigidMomentaOfParticles(&s, bodyCoordinates, bodyParticles, bodyParticleMass, mass, currentIndex, start, end, velm, s.v, s.l);
         }
         if (kick != 0.0) {
-            double total[3] = {0.0, 0.0, 0.0}, torque[3] = {0.0, 0.0, 0.0};
-            for (i = start; i < end; i++) {
-                rigidReadForce(force, paddedNumAtoms, currentIndex[bodyParticles[i]], f);
-                rigidArm(&s, bodyCoordinates, i, arm);
-                rigidCross(arm, f, t);
-                for (k = 0; k < 3; k++) {
-                    total[k] += f[k];
-                    torque[k] += t[k];
-                }
-            }
+            double total[3], torque[3];
+            rigidForceAndTorque(&s, bodyCoordinates, bodyParticles, currentIndex, start, end, force, paddedNumAtoms, total, torque);
             double nv[3], nl[3];
             for (k = 0; k < 3; k++) {
                 nv[k] = s.v[k] + total[k]*(kick/mass);
@@ -262,13 +316,7 @@ KERNEL void rigidKickDrift(int numBodies, GLOBAL const int* RESTRICT bodyStart, 
             }
             rigidReorthonormalize(s.a);
         }
-        for (i = start; i < end; i++) {
-            double x[3];
-            rigidArm(&s, bodyCoordinates, i, arm);
-            for (k = 0; k < 3; k++)
-                x[k] = s.r[k] + arm[k];
-            rigidWritePosition(posq, posqCorrection, currentIndex[bodyParticles[i]], x);
-        }
+        rigidPlaceParticles(&s, bodyCoordinates, bodyParticles, currentIndex, start, end, posq, posqCorrection);
         rigidStoreState(states, b, &s);
     }
 }
@@ -352,21 +400,12 @@ KERNEL void rigidClosingKick(int numBodies, GLOBAL const int* RESTRICT bodyStart
     for (int b = GLOBAL_ID; b < numBodies; b += GLOBAL_SIZE) {
         RigidBodyState s;
         RigidShape shape = shapes[b];
-        double arm[3], f[3], t[3], omega[3], v[3];
-        int i, k;
+        int k;
         const int start = bodyStart[b], end = bodyStart[b + 1];
         rigidLoadState(states, b, &s);
         if (kick != 0.0) {
-            double total[3] = {0.0, 0.0, 0.0}, torque[3] = {0.0, 0.0, 0.0};
-            for (i = start; i < end; i++) {
-                rigidReadForce(force, paddedNumAtoms, currentIndex[bodyParticles[i]], f);
-                rigidArm(&s, bodyCoordinates, i, arm);
-                rigidCross(arm, f, t);
-                for (k = 0; k < 3; k++) {
-                    total[k] += f[k];
-                    torque[k] += t[k];
-                }
-            }
+            double total[3], torque[3];
+            rigidForceAndTorque(&s, bodyCoordinates, bodyParticles, currentIndex, start, end, force, paddedNumAtoms, total, torque);
             const double mass = bodyMass[b];
             for (k = 0; k < 3; k++) {
                 s.v[k] += kick*total[k]/mass;
@@ -374,20 +413,7 @@ KERNEL void rigidClosingKick(int numBodies, GLOBAL const int* RESTRICT bodyStart
             }
             rigidStoreState(states, b, &s);
         }
-        rigidLabAngularVelocity(&s, &shape, omega);
-        for (i = start; i < end; i++) {
-            rigidArm(&s, bodyCoordinates, i, arm);
-            rigidCross(omega, arm, v);
-            for (k = 0; k < 3; k++)
-                v[k] += s.v[k];
-            const int index = currentIndex[bodyParticles[i]];
-            rigidWriteVelocity(velm, index, v);
-            /* as stored: in single precision velm holds floats */
-            rigidReadVelocity(velm, index, v);
-            writtenVelocities[3*i] = v[0];
-            writtenVelocities[3*i + 1] = v[1];
-            writtenVelocities[3*i + 2] = v[2];
-        }
+        rigidWriteRigidVelocities(&s, &shape, bodyCoordinates, bodyParticles, currentIndex, start, end, velm, writtenVelocities);
     }
 }
 
@@ -598,12 +624,7 @@ KERNEL void rigidFitTranslation(int numBodies, GLOBAL const int* RESTRICT bodySt
         }
         for (k = 0; k < 3; k++)
             s.r[k] += shift[k];
-        for (i = start; i < end; i++) {
-            rigidArm(&s, bodyCoordinates, i, arm);
-            for (k = 0; k < 3; k++)
-                x[k] = s.r[k] + arm[k];
-            rigidWritePosition(posq, posqCorrection, currentIndex[bodyParticles[i]], x);
-        }
+        rigidPlaceParticles(&s, bodyCoordinates, bodyParticles, currentIndex, start, end, posq, posqCorrection);
         rigidStoreState(states, b, &s);
     }
 }
@@ -621,26 +642,11 @@ KERNEL void rigidProjectVelocities(int numBodies, GLOBAL const int* RESTRICT bod
     for (int b = GLOBAL_ID; b < numBodies; b += GLOBAL_SIZE) {
         RigidBodyState s;
         RigidShape shape = shapes[b];
-        double arm[3], v[3], moment[3], omega[3], com[3] = {0.0, 0.0, 0.0}, l[3] = {0.0, 0.0, 0.0};
-        int i, k;
+        double com[3], l[3];
+        int k;
         const int start = bodyStart[b], end = bodyStart[b + 1];
         rigidLoadState(states, b, &s);
-        for (i = start; i < end; i++) {
-            rigidReadVelocity(velm, currentIndex[bodyParticles[i]], v);
-            for (k = 0; k < 3; k++)
-                com[k] += bodyParticleMass[i]*v[k];
-        }
-        for (k = 0; k < 3; k++)
-            com[k] /= bodyMass[b];
-        for (i = start; i < end; i++) {
-            rigidReadVelocity(velm, currentIndex[bodyParticles[i]], v);
-            rigidArm(&s, bodyCoordinates, i, arm);
-            for (k = 0; k < 3; k++)
-                v[k] -= com[k];
-            rigidCross(arm, v, moment);
-            for (k = 0; k < 3; k++)
-                l[k] += bodyParticleMass[i]*moment[k];
-        }
+        rigidMomentaOfParticles(&s, bodyCoordinates, bodyParticles, bodyParticleMass, bodyMass[b], currentIndex, start, end, velm, com, l);
         if (!isfinite(com[0] + com[1] + com[2] + l[0] + l[1] + l[2])) {
             notFinite[0] = 1;
             continue;
@@ -649,19 +655,7 @@ KERNEL void rigidProjectVelocities(int numBodies, GLOBAL const int* RESTRICT bod
             s.v[k] = com[k];
             s.l[k] = l[k];
         }
-        rigidLabAngularVelocity(&s, &shape, omega);
-        for (i = start; i < end; i++) {
-            const int index = currentIndex[bodyParticles[i]];
-            rigidArm(&s, bodyCoordinates, i, arm);
-            rigidCross(omega, arm, v);
-            for (k = 0; k < 3; k++)
-                v[k] += s.v[k];
-            rigidWriteVelocity(velm, index, v);
-            rigidReadVelocity(velm, index, v);
-            writtenVelocities[3*i] = v[0];
-            writtenVelocities[3*i + 1] = v[1];
-            writtenVelocities[3*i + 2] = v[2];
-        }
+        rigidWriteRigidVelocities(&s, &shape, bodyCoordinates, bodyParticles, currentIndex, start, end, velm, writtenVelocities);
         rigidStoreState(states, b, &s);
     }
 }
