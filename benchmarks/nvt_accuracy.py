@@ -417,10 +417,7 @@ def runSystem(name, state, topology, npt_system, args, platform, properties, ste
             run["comparison"] = compareToReference(run, pooled, window)
     best = {kind: largestAgreeing(runs, kind, spec["npt"]) for kind in INTEGRATORS}
     stamp(f"{name}: largest agreeing steps " + ", ".join(f"{k} {v} fs" for k, v in best.items()) + "; timing")
-    configurations = sorted({(kind, step) for kind, step in best.items() if step is not None} |
-                            {(kind, 4) for kind in INTEGRATORS if any(r["kind"] == kind and r["step"] == 4
-                                                                    and not r["failure"] for r in runs)},
-                            key=lambda c: (list(INTEGRATORS).index(c[0]), c[1]))
+    configurations = timingConfigurations(runs, best)
     seconds = timeIntegrators(system, state, configurations, spec["npt"], platform, properties,
                               args.timing_steps, args.timing_repetitions)
     timing = [dict(kind=kind, step=step, msPerStep=1000*seconds[(kind, step)],
@@ -470,6 +467,8 @@ def reportMarkdown(results, meta, figures):
              "RigidBodyLangevin (Exact), pooled. \"Agrees\": |U/molecule - ref| (and, NPT, |density - ref|) "
              f"below {AGREEMENT:g} combined standard errors, at this step and every smaller one run.", "",
              "## Headline: ns/day at equal accuracy", "",
+             f"ns/day: each integrator timed at its step, the configurations of a system taken in turn "
+             f"({meta['timing']}, medians), same platform and threads.", "",
              "| system | stock: largest agreeing step, ns/day | Exact: step, ns/day, ratio | NoSquish: step, ns/day, "
              "ratio | goal | met? |", "| --- | --- | --- | --- | ---: | --- |"]
     for result in results:
@@ -574,6 +573,45 @@ def plot(result, path):
     plt.close(figure)
 
 
+def timingConfigurations(runs, best):
+    """What to time: each integrator at its largest agreeing step, and every one stable at 4 fs at 4 fs."""
+    stableAt4 = {r["kind"] for r in runs if r["step"] == 4 and not r["failure"]}
+    return sorted({(kind, step) for kind, step in best.items() if step is not None} | {(kind, 4) for kind in stableAt4},
+                  key=lambda c: (list(INTEGRATORS).index(c[0]), c[1]))
+
+
+def retime(mode, args, meta):
+    """Time the saved systems again, one process, the configurations of each taken in turn."""
+    folder = RESULTS/mode
+    names = [name for name in (args.systems or SYSTEMS) if (folder/f"{name}.json").exists()]
+    openLog(folder/"nvt_accuracy_retime.log")
+    platform = openmm.Platform.getPlatformByName(args.platform)
+    properties = {"Threads": str(args.threads)} if args.platform == "CPU" else {}
+    states = {}
+    for name in names:
+        spec = SYSTEMS[name]
+        result = json.loads((folder/f"{name}.json").read_text())
+        key = (spec["model"], spec["protein"])
+        if key not in states:
+            topology, positions, system = buildModel(spec["model"], spec["protein"])
+            stamp(f"{name}: equilibrating 5 ps for the timing")
+            states[key] = (system, equilibrate(system, positions, platform, properties, 5.0))
+        npt_system, state = states[key]
+        system = npt_system if spec["npt"] else withoutBarostat(npt_system)
+        configurations = timingConfigurations(result["runs"], result["best"])
+        seconds = timeIntegrators(system, state, configurations, spec["npt"], platform, properties,
+                                  args.timing_steps, args.timing_repetitions)
+        result["timing"] = [dict(kind=kind, step=step, msPerStep=1000*seconds[(kind, step)],
+                                 nsPerDay=nsPerDay(step, seconds[(kind, step)])) for kind, step in configurations]
+        result["meta"]["retime"] = meta["command"]
+        result["meta"]["timing"] = f"{args.timing_repetitions} x {args.timing_steps} steps"
+        for entry in result["timing"]:
+            say(f"  {INTEGRATORS[entry['kind']]} {entry['step']:g} fs: {entry['msPerStep']:.2f} ms/step, "
+                f"{entry['nsPerDay']:.2f} ns/day")
+        (folder/f"{name}.json").write_text(json.dumps(result))
+        say(f"  load average {os.getloadavg()[0]:.1f}")
+
+
 def writeReport(mode, meta):
     folder = RESULTS/mode
     results = [json.loads((folder/f"{name}.json").read_text()) for name in SYSTEMS if (folder/f"{name}.json").exists()]
@@ -583,7 +621,9 @@ def writeReport(mode, meta):
     metas = [result["meta"] for result in results]
     meta = dict(metas[0])
     meta["commands"] = sorted({m["command"] for m in metas}, key=lambda c: [m["command"] for m in metas].index(c))
-    meta["commands"] = meta["commands"] + ["python benchmarks/nvt_accuracy.py --report" + (" --quick" if mode == "quick" else "")]
+    meta["commands"] += sorted({m["retime"] for m in metas if "retime" in m})
+    meta["commands"] += ["python benchmarks/nvt_accuracy.py --report" + (" --quick" if mode == "quick" else "")]
+    meta["timing"] = ", ".join(sorted({m.get("timing", "") for m in metas} - {""})) or "5 x 200 steps at the end of each system's runs"
     meta["date"] = ", ".join(sorted({m["date"] for m in metas}))
     figureFolder = ROOT/"docs"/"figures" if mode == "full" else folder
     document = ROOT/"docs"/"results"/"nvt_accuracy.md" if mode == "full" else folder/"nvt_accuracy.md"
@@ -614,6 +654,8 @@ def main():
     parser.add_argument("--timing-steps", type=int, help="steps per timed repetition (default 200; quick 20)")
     parser.add_argument("--timing-repetitions", type=int, default=5)
     parser.add_argument("--report", action="store_true", help="only assemble the report from saved results")
+    parser.add_argument("--retime", action="store_true", help="time the saved systems again (after all runs are done, "
+                        "when nothing else of this benchmark runs) and assemble the report")
     args = parser.parse_args()
     mode = "quick" if args.quick else "full"
     defaults = dict(time=(1.0, 25.0), discard=(0.5, 2.0), equilibrate=(2.0, 20.0), timing_steps=(20, 200))
@@ -630,6 +672,10 @@ def main():
                 platform=args.platform, threads=args.threads if args.platform == "CPU" else "-",
                 time=args.time, discard=args.discard)
     if args.report:
+        writeReport(mode, meta)
+        return
+    if args.retime:
+        retime(mode, args, meta)
         writeReport(mode, meta)
         return
     openLog(folder/f"nvt_accuracy_{'_'.join(systems)}.log")
