@@ -39,7 +39,8 @@ A run agrees with the reference if its U/molecule (and, NPT, its density) differ
 reference's by less than 2 combined standard errors. For each integrator, the largest step that
 agrees, with every smaller step it was run at agreeing too; an integrator that is unstable at a step
 (an exception, or a non-finite energy) is not run at larger ones. Then, side by side in the same
-process, the cost: each integrator timed at its largest agreeing step (and all at 4 fs), several
+process, the cost: each integrator timed at its largest agreeing step (and all at 4 fs; with --retime
+also at the pooled water boxes' steps, and for the protein at each one's largest stable step), several
 repetitions of a fixed number of steps taken in turn, medians; ns/day, and the ratio of ns/day at
 equal accuracy (rigid at its largest agreeing step over stock at its own).
 
