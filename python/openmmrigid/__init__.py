@@ -29,13 +29,15 @@ deserializeIntegrator
     A RigidBodyIntegrator or RigidBodyLangevinIntegrator from XML (``openmm.XmlSerializer.deserialize`` does the same).
 FreeRotor
     The exact torque-free motion of a single rigid body.
+testing
+    Small systems shipped with the package (``testing.alanineDipeptide()``), for examples and tests.
 special
     The Jacobi elliptic functions and elliptic integrals that FreeRotor is built on.
 """
 
 from importlib.metadata import PackageNotFoundError, version as _distributionVersion
 
-from . import special
+from . import special, testing
 from .freerotor import FreeRotor
 from .integrator import (RigidBodyIntegrator, RigidBodyIntegratorBase, RigidBodyLangevinIntegrator, deserializeIntegrator,
                          getSupportedPlatforms, pluginLoadFailures)
@@ -48,5 +50,5 @@ try:
 except PackageNotFoundError:  # imported from a source tree that was never installed
     __version__ = "unknown"
 
-__all__ = ["getSupportedPlatforms", "pluginLoadFailures", "RigidBodyIntegrator", "RigidBodyLangevinIntegrator", "RigidBodyIntegratorBase", "RigidStateDataReporter", "deserializeIntegrator", "FreeRotor", "special",
+__all__ = ["getSupportedPlatforms", "pluginLoadFailures", "RigidBodyIntegrator", "RigidBodyLangevinIntegrator", "RigidBodyIntegratorBase", "RigidStateDataReporter", "deserializeIntegrator", "FreeRotor", "special", "testing",
            "rigidBodiesFromTopology", "removeIntraBodyInteractions", "__version__"]

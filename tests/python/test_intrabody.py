@@ -17,7 +17,6 @@ precision), comparing the original System with the copy:
   the copy's by a constant, and a trajectory of the copy follows it.
 """
 
-import io
 import itertools
 
 import numpy as np
@@ -26,7 +25,6 @@ import pytest
 from openmm import app, unit
 
 import openmmrigid
-from systems import ALANINE_DIPEPTIDE
 
 REFERENCE = openmm.Platform.getPlatformByName("Reference")
 # ACE and ALA merged, but ALA's carbonyl C and O free; NME a body of its own.
@@ -90,7 +88,7 @@ def addEveryBondedType(system, positions):
 
 
 def vacuumDipeptide():
-    pdb = app.PDBFile(io.StringIO(ALANINE_DIPEPTIDE))
+    pdb = openmmrigid.testing.alanineDipeptide()
     forceField = app.ForceField("amber14-all.xml")
     system = forceField.createSystem(pdb.topology, nonbondedMethod=app.NoCutoff, constraints=app.HBonds)
     positions = np.array(pdb.positions.value_in_unit(unit.nanometer))
@@ -100,7 +98,7 @@ def vacuumDipeptide():
 
 
 def solvatedDipeptide():
-    pdb = app.PDBFile(io.StringIO(ALANINE_DIPEPTIDE))
+    pdb = openmmrigid.testing.alanineDipeptide()
     forceField = app.ForceField("amber14-all.xml", "amber14/tip3p.xml")
     modeller = app.Modeller(pdb.topology, pdb.positions)
     size = 1.8

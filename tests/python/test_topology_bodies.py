@@ -9,7 +9,6 @@ that nothing but the integrator keeps the bodies molecules: every body stays rig
 positions wrapped by OpenMM, whole.
 """
 
-import io
 
 import numpy as np
 import openmm
@@ -17,13 +16,12 @@ import pytest
 from openmm import app, unit
 
 import openmmrigid
-from systems import ALANINE_DIPEPTIDE
 
 
 def solvatedDipeptide(model="tip4pew", size=1.8, constraints=app.HBonds):
     """Alanine dipeptide (ACE ALA NME) in a small water box: topology, positions (nm), system."""
     forceField = app.ForceField("amber14-all.xml", f"amber14/{model}.xml")
-    pdb = app.PDBFile(io.StringIO(ALANINE_DIPEPTIDE))
+    pdb = openmmrigid.testing.alanineDipeptide()
     modeller = app.Modeller(pdb.topology, pdb.positions)
     positions = np.array(modeller.positions.value_in_unit(unit.nanometer))
     modeller.positions = (positions - positions.mean(axis=0) + 0.5*size)*unit.nanometer
