@@ -48,6 +48,10 @@ static void raiseOpenMMException(const std::string& message) {
     }
 }
 
+// The Python names of C++ types in the docstrings SWIG's -doxygen writes (its defaults: "boolean", "string").
+%typemap(doctype) bool "bool"
+%typemap(doctype) std::string, const std::string& "str"
+
 %include "swig/buffers.i"
 %include "swig/special.i"
 %include "swig/freerotor.i"

@@ -22,7 +22,7 @@ import textwrap
 
 from openmm import unit
 
-__all__ = ["QUANTITY_ARGUMENTS", "QUANTITY_RESULTS", "numpyStyle", "fromCpp", "applyToClasses"]
+__all__ = ["QUANTITY_ARGUMENTS", "QUANTITY_RESULTS", "numpyStyle", "fromCpp", "propertyDoc", "applyToClasses"]
 
 #: (class name, method name) -> the leading arguments that accept an openmm.unit Quantity, in their
 #: positional order after self, each with the unit it is converted to; plain numbers are taken as
@@ -66,16 +66,17 @@ _OVERLOAD = re.compile(r"^\*Overload \d+:\*$")
 
 
 class _Entry:
-    """One parameter, result or exception: a name (or None), a type, and its description lines."""
+    """One parameter, result or exception: a name (or None), a type, its description lines (as SWIG
+    wrote them) and the Python-only notes added to them."""
 
     def __init__(self, name=None, type=None):
-        self.name, self.type, self.lines = name, type, []
+        self.name, self.type, self.lines, self.notes = name, type, [], []
 
     def description(self):
         # SWIG keeps the header's alignment on continuation lines: dedent them as one block, so that
         # the relative indentation of a list inside a description survives.
         first, rest = (self.lines[0].strip() if self.lines else ""), textwrap.dedent("\n".join(self.lines[1:]))
-        return (first + ("\n" + rest if rest.strip() else "")).strip()
+        return "\n".join([(first + ("\n" + rest if rest.strip() else "")).strip()] + self.notes).strip()
 
 
 class Parsed:
@@ -179,7 +180,7 @@ def _noteArguments(parsed, parameters):
         for entry in parsed.parameters:
             if entry.name == name:
                 entry.type = f"float or {QUANTITY}"
-                entry.lines.append(f"(in Python also a Quantity, converted to {_unitName(argumentUnit)})")
+                entry.notes.append(f"(in Python also a Quantity, converted to {_unitName(argumentUnit)})")
 
 
 def _noteResult(parsed, resultUnit):
@@ -188,7 +189,7 @@ def _noteResult(parsed, resultUnit):
         parsed.results.append(_Entry(None, QUANTITY))
     for entry in parsed.results:
         entry.type = QUANTITY
-        entry.lines.append(note)
+        entry.notes.append(note)
 
 
 def _inUnit(value, argumentUnit):
@@ -291,19 +292,39 @@ def _applyToConstructor(cls, constructor):
     cls.__doc__ = cls.__doc__ + "\n\n" + _mergedConstructorSections(overloads)
 
 
-def fromCpp(cppFunction, notes=None, optional=()):
-    """The numpy-style docstring of a SWIG function, for the pure-Python function that wraps it.
+def fromCpp(cppFunction, notes=None, optional=(), types=None, drop=(), description=None, pythonNotes=None):
+    """The numpy-style docstring of a SWIG function, for the pure-Python function or class that wraps it.
 
-    notes maps a parameter name to a sentence the Python function adds to its description; the
-    parameters named in optional are marked so (the Python function has a default the C++ has not).
+    What the Python side changes is given here, next to the Python code that does it:
+    notes maps a parameter or result name to a sentence the Python function adds to its description;
+    types maps a name to the Python type, where it differs from the C++ one; the parameters in
+    optional have a default in Python; those in drop are not taken in Python. description replaces
+    the C++ description (a class's docstring, for its constructor's parameters), and pythonNotes is a
+    paragraph added to it.
     """
     parsed = Parsed(cppFunction.__doc__ or "")
-    byName = {entry.name: entry for entry in parsed.parameters}
-    for name in set(notes or {}) | set(optional):
-        if name not in byName:
-            raise ValueError(f"{cppFunction.__name__} has no parameter {name}")
+    named = {entry.name: entry for entry in parsed.parameters + parsed.results if entry.name}
+    for name in set(notes or {}) | set(types or {}) | set(optional) | set(drop):
+        if name not in named:
+            raise ValueError(f"{cppFunction.__name__} has no parameter or result {name}")
+    parsed.parameters = [entry for entry in parsed.parameters if entry.name not in drop]
     for name, note in (notes or {}).items():
-        byName[name].lines.append(note)
+        named[name].notes.append(note)
+    for name, pythonType in (types or {}).items():
+        named[name].type = pythonType
     for name in optional:
-        byName[name].type = f"{byName[name].type}, optional" if byName[name].type else "optional"
+        named[name].type = f"{named[name].type}, optional" if named[name].type else "optional"
+    if description is not None:
+        parsed.description = Parsed(description).description
+    if pythonNotes:
+        parsed.description += [""] + textwrap.wrap(pythonNotes, 100)
     return parsed.render()
+
+
+def propertyDoc(pythonType, cppGetter, note=None):
+    """The docstring of a property that reads cppGetter: numpy's "type: description", the getter's
+    description ("Get the x" read as "The x") and a Python-only note."""
+    text = "\n".join(Parsed(cppGetter.__doc__ or "").description).strip()
+    if text.startswith("Get the "):
+        text = "The " + text[len("Get the "):]
+    return f"{pythonType}: {text}" + (f"\n\n{note}" if note else "")

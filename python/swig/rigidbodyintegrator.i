@@ -197,8 +197,6 @@ RigidBodyLangevinIntegrator* asRigidBodyLangevinIntegrator(OpenMM::Integrator* i
 %typemap(doctype) const std::vector<std::vector<int> >& "list of list of int"
 %typemap(doctype) std::vector<int> "list of int"
 %typemap(doctype) std::vector<double> "list of float"
-%typemap(doctype) std::string, const std::string& "str"
-%typemap(doctype) bool "bool"
 
 %pythonbegin %{
 import openmm as _openmm_package
