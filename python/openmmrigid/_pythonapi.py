@@ -117,9 +117,10 @@ class Parsed:
                 current = self.results[-1]
                 current.lines.append(rest)
             else:
-                # ":raises: OpenMMException if ..." -- the first word is the C++ exception.
-                exception, _, why = rest.partition(" ")
-                current = _Entry(_PYTHON_EXCEPTION)
+                # ":raises: OpenMMException if ...": the first word is the C++ exception, which reaches
+                # Python as openmm.OpenMMException whatever it is.
+                why = rest.partition(" ")[2]
+                current = _Entry(None, _PYTHON_EXCEPTION)
                 current.lines.append(why)
                 self.raises.append(current)
         while self.description and not self.description[-1].strip():
@@ -136,10 +137,10 @@ class Parsed:
 def _section(title, entries):
     lines = [title, "-" * len(title)]
     for entry in entries:
-        if entry.name is not None and entry.name != _PYTHON_EXCEPTION:
+        if entry.name is not None:
             lines.append(f"{entry.name} : {entry.type}" if entry.type else entry.name)
         else:
-            lines.append(entry.name or entry.type or "")
+            lines.append(entry.type or "")
         description = entry.description()
         if description:
             lines.append(textwrap.indent(description, "    "))
@@ -171,8 +172,10 @@ def numpyStyle(text):
 # The Python-only notes
 # ------------------------------------------------------------------------------------------------
 
-def _unitName(value):
-    return value.get_symbol() if hasattr(value, "get_symbol") else str(value)
+def unitName(value):
+    """The symbol of an openmm.unit Unit as the docstrings write it ("K", "1/ps", "kJ/mol")."""
+    symbol = value.get_symbol()
+    return "1" + symbol if symbol.startswith("/") else symbol
 
 
 def _noteArguments(parsed, parameters):
@@ -180,11 +183,11 @@ def _noteArguments(parsed, parameters):
         for entry in parsed.parameters:
             if entry.name == name:
                 entry.type = f"float or {QUANTITY}"
-                entry.notes.append(f"(in Python also a Quantity, converted to {_unitName(argumentUnit)})")
+                entry.notes.append(f"(in Python also a Quantity, converted to {unitName(argumentUnit)})")
 
 
 def _noteResult(parsed, resultUnit):
-    note = f"(in Python a Quantity, in {_unitName(resultUnit)})"
+    note = f"(in Python a Quantity, in {unitName(resultUnit)})"
     if not parsed.results:
         parsed.results.append(_Entry(None, QUANTITY))
     for entry in parsed.results:

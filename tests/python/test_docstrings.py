@@ -219,7 +219,7 @@ def test_quantity_arguments_are_noted(key):
     for name, argumentUnit in _pythonapi.QUANTITY_ARGUMENTS[key]:
         pythonType, description = _parameterEntry(doc, name)
         assert pythonType == "float or openmm.unit.Quantity"
-        assert f"converted to {argumentUnit.get_symbol()}" in description
+        assert f"converted to {_pythonapi.unitName(argumentUnit)}" in description
 
 
 @pytest.mark.parametrize("key", sorted(_pythonapi.QUANTITY_ARGUMENTS), ids="{0[0]}.{0[1]}".format)
@@ -259,7 +259,7 @@ def test_quantity_results_are_noted(key):
     doc = getattr(_class(className), methodName).__doc__
     returns = doc.split("Returns\n-------\n")[1]
     assert returns.startswith("openmm.unit.Quantity\n")
-    assert f"a Quantity, in {_pythonapi.QUANTITY_RESULTS[key].get_symbol()}" in returns
+    assert f"a Quantity, in {_pythonapi.unitName(_pythonapi.QUANTITY_RESULTS[key])}" in returns
 
 
 def test_quantity_results_are_quantities():
