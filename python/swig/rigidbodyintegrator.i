@@ -193,7 +193,6 @@ RigidBodyLangevinIntegrator* asRigidBodyLangevinIntegrator(OpenMM::Integrator* i
 // SWIG's -doxygen turns the headers' Doxygen into the docstrings; the doctype typemaps name the Python
 // types of what the typemaps above convert. The Python-only notes (openmm.unit Quantities, and the
 // conversions themselves) are added by openmmrigid/_pythonapi.py, in one table.
-%typemap(doctype) const std::vector<std::vector<int> >& bodies "list of list of int"
 %typemap(doctype) const std::vector<std::vector<int> >& "list of list of int"
 %typemap(doctype) std::vector<int> "list of int"
 %typemap(doctype) std::vector<double> "list of float"
