@@ -48,6 +48,10 @@ static void raiseOpenMMException(const std::string& message) {
     }
 }
 
+// The Python names of C++ types in the docstrings SWIG's -doxygen writes (its defaults: "boolean", "string").
+%typemap(doctype) bool "bool"
+%typemap(doctype) std::string, const std::string& "str"
+
 %include "swig/buffers.i"
 %include "swig/special.i"
 %include "swig/freerotor.i"
@@ -76,10 +80,6 @@ RigidBodyLangevinIntegrator* asRigidBodyLangevinIntegrator(OpenMM::Integrator* i
     for (size_t i = 0; i < names.size(); i++)
         PyList_SetItem($result, i, PyUnicode_FromString(names[i].c_str()));
 }
-%feature("docstring") OpenMMRigid::getSupportedPlatforms "getSupportedPlatforms() -> list of str
-
-The names of the platforms that have the rigid-body integrators' kernels in this installation
-(e.g. ['Reference', 'CPU', 'OpenCL']): a Context with a RigidBodyIntegrator or
-RigidBodyLangevinIntegrator can be created on each. For CUDA, install openmm-rigid[cuda13].";
+%typemap(doctype) std::vector<std::string> "list of str"
 %rename(_explainUnsupportedPlatforms) OpenMMRigid::explainUnsupportedPlatforms;
 %include "PlatformSupport.h"

@@ -8,8 +8,11 @@
 namespace OpenMMRigid {
 
 /**
- * The platforms registered now that have the rigid-body integrators' kernels (the plugins for them
- * are loaded): e.g. Reference, CPU, OpenCL.
+ * Get the platforms registered now that have the rigid-body integrators' kernels (the plugins for
+ * them are loaded): a Context with a RigidBodyIntegrator or RigidBodyLangevinIntegrator can be
+ * created on each. CUDA's plugin comes in its own package, openmm-rigid-cuda-13.
+ *
+ * @return the names of the platforms, e.g. Reference, CPU, OpenCL
  */
 OPENMM_EXPORT_RIGID std::vector<std::string> getSupportedPlatforms();
 

@@ -75,11 +75,7 @@ public:
      *                  Particles in no body move freely.
      */
     RigidBodyIntegrator(double stepSize, const std::vector<std::vector<int> >& bodies);
-    /**
-     * The sequence of kicks and free drifts that makes one step. Each starts with a kick that reuses
-     * the forces from the end of the previous step and evaluates the forces once after every drift.
-     */
-    /** The sequence of kicks and drifts of a step (see RigidBodyOptions for each). */
+    /** The sequence of kicks and drifts of a step (setSplitting() describes each). */
     typedef RigidBodyOptions::Splitting Splitting;
     /** Velocity Verlet: kick dt/2, drift dt, kick dt/2. Second order, one force evaluation per step. */
     static constexpr Splitting Verlet = RigidBodyOptions::Verlet;
@@ -89,20 +85,44 @@ public:
     static constexpr Splitting Yoshida4 = RigidBodyOptions::Yoshida4;
     /** The optimized fourth-order Forest-Ruth-like scheme of Omelyan, Mryglod and Folk (2002): four force evaluations per step. */
     static constexpr Splitting Omelyan4 = RigidBodyOptions::Omelyan4;
-    /** Get the splitting: the sequence of kicks and drifts that makes one step. */
+    /**
+     * Get the splitting: the sequence of kicks and drifts that makes one step.
+     *
+     * @return Verlet (the default), Omelyan2, Yoshida4 or Omelyan4
+     */
     Splitting getSplitting() const {
         return splitting;
     }
     /**
-     * Set the splitting: the sequence of kicks and drifts that makes one step.
+     * Set the splitting: the sequence of kicks and drifts that makes one step. Each splitting starts
+     * with a kick that reuses the forces from the end of the previous step and evaluates the forces
+     * once after each of its drifts; bodies and free particles (with their constraints) follow the
+     * same sequence. Takes effect at the next step.
      *
+     * @param splitting  one of
+     *                   - Verlet: velocity Verlet, kick dt/2, drift dt, kick dt/2. Second order, one force
+     *                     evaluation per step.
+     *                   - Omelyan2: the optimized two-stage scheme of Omelyan, Mryglod and Folk, Phys.
+     *                     Rev. E 65, 056706 (2002): kick lambda dt, drift dt/2, kick (1 - 2 lambda) dt,
+     *                     drift dt/2, kick lambda dt with lambda = 0.1931833275037836. Second order with a
+     *                     smaller error than Verlet at the same step; two force evaluations per step.
+     *                   - Yoshida4: Yoshida's triple jump (Phys. Lett. A 150, 262 (1990)), Verlet steps of
+     *                     w1 dt, w0 dt and w1 dt with w1 = 1/(2 - 2^(1/3)) and w0 = 1 - 2 w1 (the middle
+     *                     one backwards in time). Fourth order, with either rotation method and with
+     *                     constraints; three force evaluations per step.
+     *                   - Omelyan4: the optimized fourth-order Forest-Ruth-like scheme of Omelyan, Mryglod
+     *                     and Folk, Comput. Phys. Commun. 146, 188 (2002), in its velocity form: five kicks
+     *                     and four drifts; four force evaluations per step. Fourth order when the drifts
+     *                     are exact; with NoSquish, or for free particles held by constraints (which drift
+     *                     by SHAKE), it is second order, where Yoshida4 stays fourth order.
      * @throws OpenMMException if the value is not a Splitting
      */
     void setSplitting(Splitting splitting);
     /**
-     * Get the number of force evaluations per step that the splitting takes (1 for Verlet, 2 for
-     * Omelyan2, 3 for Yoshida4, 4 for Omelyan4). The forces at the end of a step are those the next
-     * step starts with, so this is the number of drifts in a step.
+     * Get the number of force evaluations per step that the splitting takes. The forces at the end of
+     * a step are those the next step starts with, so this is the number of drifts in a step.
+     *
+     * @return 1 for Verlet, 2 for Omelyan2, 3 for Yoshida4, 4 for Omelyan4
      */
     int getNumForceEvaluations() const;
     /**
@@ -117,8 +137,8 @@ public:
      * The velocities it rescales, and reports, are on-step: the temperature of their total kinetic
      * energy (computeSystemTemperature(), StateDataReporter's column) reads the bath's at any step
      * size, by construction. How that energy divides between translation and rotation is the
-     * dynamics': for rigid water at 6 to 8 fs the on-step rotation reads about 13 K cold and the
-     * translation as much warm (README, benchmarks/thermostat_temperature.py).
+     * dynamics': for rigid water at 6 to 8 fs the on-step rotation reads cold and the translation as
+     * much warm (the README gives the measurements, benchmarks/thermostat_temperature.py makes them).
      *
      * @param temperature    the temperature of the heat bath, measured in Kelvin (0 damps the motion)
      * @param collisionTime  tau, the relaxation time of the kinetic energy, measured in ps
@@ -133,29 +153,41 @@ public:
     bool hasThermostat() const {
         return thermostat;
     }
-    /** Get the temperature of the thermostat, in Kelvin (0 if none was ever set). */
+    /**
+     * Get the temperature of the thermostat's heat bath.
+     *
+     * @return the temperature, measured in Kelvin (0 if no thermostat was ever set)
+     */
     double getThermostatTemperature() const {
         return thermostatTemperature;
     }
-    /** Get the collision time tau of the thermostat, in ps (0 if none was ever set). */
+    /**
+     * Get the collision time tau of the thermostat.
+     *
+     * @return the collision time, measured in ps (0 if no thermostat was ever set)
+     */
     double getThermostatCollisionTime() const {
         return thermostatCollisionTime;
     }
     /**
      * Get the kinetic energy the thermostat has added to the system since the Context was created
-     * (negative where it removed energy), measured in kJ/mol. The total energy minus this is
-     * Bussi's effective energy, conserved up to the integration error. Saved in checkpoints. Only
-     * available once the integrator is bound to a Context.
+     * (negative where it removed energy). The total energy minus this is Bussi's effective energy,
+     * conserved up to the integration error. Saved in checkpoints. Only available once the
+     * integrator is bound to a Context.
+     *
+     * @return the energy added, measured in kJ/mol
      */
     double getThermostatWork();
-    /** Get the random number seed of the thermostat. See setRandomNumberSeed() for details. */
+    /** Get the random number seed of the thermostat (0: a new one for every Context). See setRandomNumberSeed(). */
     int getRandomNumberSeed() const {
         return randomNumberSeed;
     }
     /**
      * Set the random number seed of the thermostat, read when a Context is created. With the same
      * seed the Reference and CPU platforms give the same trajectory, with any number of threads;
-     * different seeds give different ones. 0 (the default) picks a new seed for every Context.
+     * different seeds give different ones.
+     *
+     * @param seed  the seed; 0 (the default) picks a new seed for every Context
      */
     void setRandomNumberSeed(int seed) {
         randomNumberSeed = seed;

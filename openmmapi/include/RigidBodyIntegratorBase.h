@@ -16,16 +16,18 @@ namespace OpenMMRigid {
 class IntegrateRigidBodyStepKernel;
 class RigidBodySystem;
 
+// The step loop of the integrator contract lives here: update the context state, re-fit the bodies
+// if something moved the particles, compute the forces of the integration force groups, run the
+// step sequence of internal/StepSequence.h on the platform's kernel. The body topology
+// (internal/RigidBodySystem.h) is built once per Context, and every question about the bodies is
+// answered from it, without touching the Context's state.
 /**
- * What every rigid-body integrator of this plugin has in common: the bodies (found from the
- * System's rigid constraint clusters or given explicitly), the rotation method of their free drift,
- * the questions one may ask about them (kinds, moments, kinetic energies, degrees of freedom,
- * temperature), and the step loop of the integrator contract (update the context state, re-fit the
- * bodies if something moved the particles, compute the forces of the integration force groups,
- * run the step sequence of internal/StepSequence.h on the platform's kernel). It builds the body
- * topology (internal/RigidBodySystem.h) once per Context; every question about the bodies is
- * answered from it, without touching the Context's state. RigidBodyIntegrator (constant energy) and RigidBodyLangevinIntegrator
- * (constant temperature) derive from it; it cannot be created on its own.
+ * The base of RigidBodyIntegrator (constant energy, or constant temperature with its thermostat) and
+ * RigidBodyLangevinIntegrator (constant temperature): what every rigid-body integrator of this plugin
+ * has in common. It holds the bodies (found from the System's rigid constraint clusters or given
+ * explicitly), the rotation method of their free drift, and the questions one may ask about them:
+ * their particles, kinds and moments, the translational and rotational kinetic energies, the degrees
+ * of freedom and the temperature. It cannot be created on its own.
  */
 class OPENMM_EXPORT_RIGID RigidBodyIntegratorBase : public OpenMM::Integrator {
 public:
@@ -35,13 +37,19 @@ public:
     static constexpr RotationMethod Exact = RigidBodyOptions::Exact;
     /** The symplectic NO_SQUISH splitting of the free rotation (Miller et al., 2002). */
     static constexpr RotationMethod NoSquish = RigidBodyOptions::NoSquish;
-    /** Get the method used to advance the orientation of each body. */
+    /**
+     * Get the method used to advance the orientation of each body.
+     *
+     * @return Exact (the default) or NoSquish
+     */
     RotationMethod getRotationMethod() const {
         return rotationMethod;
     }
     /**
      * Set the method used to advance the orientation of each body.
      *
+     * @param method  Exact (the exact free rotation of van Zon and Schofield) or NoSquish (the
+     *                NO_SQUISH splitting of Miller et al.)
      * @throws OpenMMException if the value is not a RotationMethod
      */
     void setRotationMethod(RotationMethod method);
@@ -49,7 +57,11 @@ public:
     bool hasExplicitBodies() const {
         return explicitBodies;
     }
-    /** Get the explicit bodies passed to the constructor (empty when they are found from the System). */
+    /**
+     * Get the explicit bodies passed to the constructor.
+     *
+     * @return the particle indices of each body; empty when the bodies are found from the System
+     */
     const std::vector<std::vector<int> >& getExplicitBodies() const {
         return bodies;
     }
@@ -61,45 +73,56 @@ public:
      * Get the particle indices of a rigid body. Only available once the integrator is bound to a Context.
      *
      * @param index  the index of the body, from 0 to getNumBodies() - 1
+     * @return the indices of the body's particles, in the order the body was given or found
      */
     std::vector<int> getBodyParticles(int index) const;
     /**
-     * Get the kind of a rigid body: "point" (one particle: translation only), "linear" (two rotational
-     * degrees of freedom), "spherical", "symmetric" or "asymmetric" (by its principal moments).
-     * Only available once the integrator is bound to a Context; for an explicit body, once positions
-     * have been set.
+     * Get the kind of a rigid body. Only available once the integrator is bound to a Context; for an
+     * explicit body, once positions have been set.
      *
      * @param index  the index of the body, from 0 to getNumBodies() - 1
+     * @return "point" (one particle: translation only), "linear" (two rotational degrees of freedom),
+     *         "spherical", "symmetric" or "asymmetric" (by its principal moments)
      */
     std::string getBodyKind(int index) const;
     /**
-     * Get the principal moments of inertia of a rigid body, in amu nm^2, in ascending order.
+     * Get the principal moments of inertia of a rigid body, in amu nm^2, in ascending order. Only
+     * available once the integrator is bound to a Context; for an explicit body, once positions have
+     * been set.
      *
      * @param index  the index of the body, from 0 to getNumBodies() - 1
+     * @return the three principal moments, measured in amu nm^2
      */
     std::vector<double> getBodyMoments(int index) const;
     /**
      * Get the kinetic energy of the translation of the bodies' centres of mass plus that of the free
-     * particles, measured in kJ/mol. Only available once the integrator is bound to a Context.
+     * particles. Only available once the integrator is bound to a Context.
+     *
+     * @return the kinetic energy, measured in kJ/mol
      */
     double getTranslationalKineticEnergy();
     /**
-     * Get the kinetic energy of the rotation of the bodies about their centres of mass, measured in kJ/mol.
-     * Only available once the integrator is bound to a Context.
+     * Get the kinetic energy of the rotation of the bodies about their centres of mass. Only available
+     * once the integrator is bound to a Context.
+     *
+     * @return the kinetic energy, measured in kJ/mol
      */
     double getRotationalKineticEnergy();
     /**
      * Get the number of degrees of freedom of the system as this integrator moves it: 3 per free
      * particle, less one per constraint among free particles, plus 3 translational and 0 (point),
      * 2 (linear) or 3 rotational ones per body, less 3 if the System has a CMMotionRemover. With it,
-     * the temperature is 2 KE / (dof k_B). Only available once the integrator is bound to a Context.
+     * the temperature is 2 KE / (dof k_B). Only available once the integrator is bound to a Context;
+     * with explicit bodies, once positions have been set (a body's shape decides whether it is linear).
      */
     int getNumDegreesOfFreedom() const;
     /**
      * Get the instantaneous temperature of the system, 2 KE / (dof k_B) with dof from
-     * getNumDegreesOfFreedom(), measured in K. openmm.app.StateDataReporter uses this method when an
-     * integrator has it, so its temperature is right for explicit bodies too. Only available once
-     * the integrator is bound to a Context.
+     * getNumDegreesOfFreedom() (0 if there are no degrees of freedom). openmm.app.StateDataReporter
+     * uses this method when an integrator has it, so its temperature is right for explicit bodies
+     * too. Available when getNumDegreesOfFreedom() is.
+     *
+     * @return the temperature, measured in K
      */
     double computeSystemTemperature();
     /**
@@ -108,7 +131,7 @@ public:
      * @param steps   the number of time steps to take
      */
     void step(int steps);
-    /** "RigidBodyIntegrator" or "RigidBodyLangevinIntegrator": the class the user made, which messages name. */
+    /** Get the name of the class the user made, "RigidBodyIntegrator" or "RigidBodyLangevinIntegrator", which messages name. */
     const std::string& getClassName() const {
         return className;
     }

@@ -47,9 +47,10 @@ namespace OpenMMRigid {
  * (getVelocityTimeOffset() is dt/2), and the kinetic energy, the temperature and the translational
  * and rotational kinetic energies are theirs. Their distribution is canonical: for a harmonic mode
  * the sampled m <v^2> is exactly kT at any stable step, where BAOAB's on-step velocities read it low
- * by the factor 1 - (omega dt)^2/4, so that the rotational temperature of rigid water read 1 to 1.5 %
- * low at 2 fs and about 4 % at 4 fs from on-step velocities. Velocities one sets are taken as such
- * half-step velocities (setVelocitiesToTemperature() shifts them by half a kick, as for
+ * by the factor 1 - (omega dt)^2/4. For rigid water, whose librations are its stiffest modes, the
+ * rotational temperature of the on-step velocities reads several percent low at 4 fs, while that of
+ * these velocities reads the bath's (the README gives the measurements). Velocities one sets are
+ * taken as such half-step velocities (setVelocitiesToTemperature() shifts them by half a kick, as for
  * LangevinMiddleIntegrator).
  *
  * Random numbers: each body and each free particle draws its normal deviates from a counter-based
@@ -80,7 +81,11 @@ public:
      */
     RigidBodyLangevinIntegrator(double temperature, double frictionCoeff, double stepSize,
                                 const std::vector<std::vector<int> >& bodies);
-    /** Get the temperature of the heat bath (in Kelvin). */
+    /**
+     * Get the temperature of the heat bath.
+     *
+     * @return the temperature, measured in Kelvin
+     */
     double getTemperature() const {
         return temperature;
     }
@@ -91,19 +96,23 @@ public:
      * @throws OpenMMException if the value is negative or not finite
      */
     void setTemperature(double temp);
-    /** Get the friction coefficient which determines how strongly the system is coupled to the heat bath (in inverse ps). */
+    /**
+     * Get the friction coefficient which determines how strongly the system is coupled to the heat bath.
+     *
+     * @return the friction coefficient, measured in 1/ps
+     */
     double getFriction() const {
         return friction;
     }
     /**
      * Set the friction coefficient which determines how strongly the system is coupled to the heat
-     * bath. It may be changed between steps.
+     * bath. It may be changed between steps; with 0 the step is leapfrog Verlet with exact drifts.
      *
      * @param coeff  the friction coefficient, measured in 1/ps
      * @throws OpenMMException if the value is negative or not finite
      */
     void setFriction(double coeff);
-    /** Get the random number seed. See setRandomNumberSeed() for details. */
+    /** Get the random number seed (0: a new one for every Context). See setRandomNumberSeed() for details. */
     int getRandomNumberSeed() const {
         return randomNumberSeed;
     }
@@ -120,6 +129,8 @@ public:
      * Context is created from this Integrator. This is done to ensure that each Context receives
      * unique random seeds without you needing to set them explicitly. The seed is read when the
      * Context is created; changing it afterwards has no effect on that Context.
+     *
+     * @param seed  the seed; 0 (the default) picks a new seed for every Context
      */
     void setRandomNumberSeed(int seed) {
         randomNumberSeed = seed;
@@ -127,6 +138,8 @@ public:
     /**
      * Get the time by which the velocities the Context holds lag behind the positions: half a step,
      * as for LangevinMiddleIntegrator (see the class description).
+     *
+     * @return half the step size, measured in ps
      */
     double getVelocityTimeOffset() const {
         return 0.5*getStepSize();

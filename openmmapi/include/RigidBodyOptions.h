@@ -16,28 +16,18 @@ struct RigidBodyOptions {
         /** The symplectic NO_SQUISH splitting of the free rotation (Miller et al., 2002). */
         NoSquish = 1
     };
-    /** The sequence of kicks and drifts of a RigidBodyIntegrator step (internal/Splitting.h has the coefficients). */
+    /**
+     * The sequence of kicks and drifts of a RigidBodyIntegrator step. RigidBodyIntegrator::setSplitting()
+     * describes each; openmmapi/src/Splitting.cpp has the coefficients.
+     */
     enum Splitting {
         /** Velocity Verlet: kick dt/2, drift dt, kick dt/2. Second order, one force evaluation per step. */
         Verlet = 0,
-        /**
-         * The optimized two-stage scheme of Omelyan, Mryglod and Folk (2002): kick lambda dt, drift dt/2,
-         * kick (1 - 2 lambda) dt, drift dt/2, kick lambda dt with lambda = 0.1931833275037836. Second
-         * order with a smaller error than Verlet at the same step; two force evaluations per step.
-         */
+        /** The optimized two-stage scheme of Omelyan, Mryglod and Folk (2002): second order, two force evaluations per step. */
         Omelyan2 = 1,
-        /**
-         * Yoshida's triple jump: Verlet steps of w1 dt, w0 dt and w1 dt with w1 = 1/(2 - 2^(1/3)) and
-         * w0 = 1 - 2 w1 (the middle one backwards in time). Fourth order, with either rotation method
-         * and with constraints; three force evaluations per step.
-         */
+        /** Yoshida's fourth-order triple jump: three force evaluations per step. */
         Yoshida4 = 2,
-        /**
-         * The optimized fourth-order Forest-Ruth-like scheme of Omelyan, Mryglod and Folk (2002), in
-         * its velocity form: five kicks and four drifts; four force evaluations per step. Fourth order
-         * when the drifts are exact: with NoSquish, or for free particles held by constraints (which
-         * drift by SHAKE), it is second order. Yoshida4 is fourth order in both cases.
-         */
+        /** The optimized fourth-order Forest-Ruth-like scheme of Omelyan, Mryglod and Folk (2002): four force evaluations per step. */
         Omelyan4 = 3
     };
 };

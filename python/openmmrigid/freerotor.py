@@ -3,61 +3,43 @@
 import numpy as np
 from openmm import OpenMMException
 
+from . import _pythonapi
 from . import openmmrigid as _swig
 from ._validation import asFloatArray
 
 __all__ = ["FreeRotor"]
 
+_Cpp = _swig._CppFreeRotor
 _REPRESENTATION_CODES = {
-    "auto": _swig.FreeRotorAutomatic,
-    "theta-series": _swig.FreeRotorThetaSeries,
-    "elliptic-integral": _swig.FreeRotorEllipticIntegral,
+    "auto": _Cpp.Automatic,
+    "theta-series": _Cpp.ThetaSeries,
+    "elliptic-integral": _Cpp.EllipticIntegral,
 }
 _REPRESENTATION_NAMES = {
-    _swig.FreeRotorThetaSeries: "theta-series",
-    _swig.FreeRotorEllipticIntegral: "elliptic-integral",
+    _Cpp.ThetaSeries: "theta-series",
+    _Cpp.EllipticIntegral: "elliptic-integral",
 }
+
+_EXAMPLES = """Examples
+--------
+>>> rotor = FreeRotor([1.0, 2.0, 3.0], [0.1, 1.0, 0.2])
+>>> omega, attitude = rotor.evolve(10.0)
+>>> omegas, attitudes = rotor.evolve(np.linspace(0.0, 10.0, 101))  # shapes (101, 3), (101, 3, 3)"""
 
 
 class FreeRotor:
-    """The exact torque-free motion of a rigid body.
-
-    The body's angular velocity and attitude at any time follow in closed form from the initial
-    state: Jacobi elliptic functions and either a theta series or an elliptic integral of the third
-    kind for an asymmetric top (van Zon and Schofield, J. Comput. Phys. 225, 145 (2007)), elementary
-    functions for linear, spherical and symmetric tops. This is the rotational half of the free drift
-    in the integrator, exposed for checks and diagnostics.
-
-    All quantities may be in any consistent units (for example amu nm^2, 1/ps and ps). Quantities
-    from ``openmm.unit`` are accepted and converted to OpenMM's MD unit system (amu, nm, ps, radian).
-
-    Parameters
-    ----------
-    moments : array_like, shape (3,)
-        The principal moments of inertia (mass x length^2), in any order, non-negative. One may be
-        zero if the other two are equal: a linear body, whose zero moment marks its axis.
-    omega : array_like, shape (3,)
-        The angular velocity at t = 0 in the body frame (1/time).
-    attitude : array_like, shape (3, 3), optional
-        The rotation matrix (orthonormal, determinant +1) from the lab frame to the body frame at
-        t = 0, so that ``attitude @ v_lab`` gives body components. The identity by default.
-    representation : {"auto", "theta-series", "elliptic-integral"}, optional
-        How an asymmetric top's rotation angle is computed. "auto" picks the cheaper of the two
-        exact forms; the others force one of them, for diagnostics. Ignored for other kinds.
-
-    Raises
-    ------
-    openmm.OpenMMException
-        If an argument has the wrong shape or is not numeric, if a moment is negative (or the
-        moments are otherwise inconsistent), if any entry is NaN or infinite, if attitude is not a
-        rotation, or if the forced representation cannot describe this motion.
-
-    Examples
-    --------
-    >>> rotor = FreeRotor([1.0, 2.0, 3.0], [0.1, 1.0, 0.2])
-    >>> omega, attitude = rotor.evolve(10.0)
-    >>> omegas, attitudes = rotor.evolve(np.linspace(0.0, 10.0, 101))  # shapes (101, 3), (101, 3, 3)
-    """
+    # The docstrings are OpenMMRigid::FreeRotor's (numerics/FreeRotor.h, through SWIG's -doxygen),
+    # with what this class does differently: numpy arrays, properties, representations by name.
+    __doc__ = _pythonapi.fromCpp(
+        _Cpp.__init__, description=_Cpp.__doc__,
+        pythonNotes="In Python the arguments may also be openmm.unit Quantities, converted to OpenMM's MD "
+                    "unit system (amu, nm, ps, radian).",
+        types={"moments": "array_like, shape (3,)", "omega": "array_like, shape (3,)",
+               "attitude": "array_like, shape (3, 3)", "representation": '{"auto", "theta-series", "elliptic-integral"}'},
+        notes={"attitude": "The identity if omitted.",
+               "representation": 'In Python by name: "auto" (Automatic, the default), "theta-series" or '
+                                 '"elliptic-integral".'},
+        optional=("attitude", "representation"), drop=("checkInput",)) + "\n\n" + _EXAMPLES
 
     def __init__(self, moments, omega, attitude=None, representation="auto"):
         moments = asFloatArray("FreeRotor", "moments", moments, (3,))
@@ -69,43 +51,16 @@ class FreeRotor:
             allowed = ", ".join(f'"{name}"' for name in _REPRESENTATION_CODES)
             raise OpenMMException(f"FreeRotor: representation must be one of {allowed}; received {representation!r}")
         self._requestedRepresentation = representation
-        self._rotor = _swig.FreeRotorAdaptor(moments, omega, attitude, _REPRESENTATION_CODES[representation])
-        self._kind = self._rotor.getKind()
-        self._moments = self._readVector(self._rotor.getMoments)
-        self._omega = self._readVector(self._rotor.getOmega)
-        self._angularMomentum = self._readVector(self._rotor.getAngularMomentum)
-        self._attitude = np.empty((3, 3))
-        self._rotor.getAttitude(self._attitude)
+        self._rotor = _Cpp(moments, omega, attitude, _REPRESENTATION_CODES[representation])
+        self._kind = _Cpp.kindName(self._rotor.getKind())
+        self._moments = np.array(self._rotor.getMoments())
+        self._omega = np.array(self._rotor.getOmega())
+        self._angularMomentum = np.array(self._rotor.getAngularMomentum())
+        self._attitude = np.array(self._rotor.getAttitude())
         for array in (self._moments, self._omega, self._angularMomentum, self._attitude):
             array.flags.writeable = False
 
-    @staticmethod
-    def _readVector(getter):
-        vector = np.empty(3)
-        getter(vector)
-        return vector
-
     def evolve(self, t):
-        """The angular velocity and attitude at time t.
-
-        Parameters
-        ----------
-        t : float or array_like, shape (n,)
-            The time or times, measured from the initial state (same time unit as omega; may be
-            negative). A Quantity is converted to ps.
-
-        Returns
-        -------
-        omega : numpy.ndarray, shape (3,) or (n, 3)
-            The body-frame angular velocity at each time (1/time).
-        attitude : numpy.ndarray, shape (3, 3) or (n, 3, 3)
-            The lab-to-body rotation matrix at each time.
-
-        Raises
-        ------
-        openmm.OpenMMException
-            If t is neither a number nor a 1-D array of numbers.
-        """
         times = asFloatArray("FreeRotor.evolve", "t", t)
         flatTimes = times.reshape(-1)
         omega = np.empty((flatTimes.size, 3))
@@ -115,47 +70,43 @@ class FreeRotor:
             return omega[0], attitude[0]
         return omega, attitude
 
+    evolve.__doc__ = _pythonapi.fromCpp(
+        _Cpp.evolve,
+        types={"t": "float or array_like, shape (n,)", "omega": "numpy.ndarray, shape (3,) or (n, 3)",
+               "attitude": "numpy.ndarray, shape (3, 3) or (n, 3, 3)"},
+        notes={"t": "In Python also a 1-D array of times, or a Quantity (converted to ps).",
+               "omega": "One row per time for an array t.", "attitude": "One matrix per time for an array t."})
+
     @property
     def kind(self):
-        """str: "linear", "spherical", "symmetric" or "asymmetric", from the principal moments."""
         return self._kind
 
     @property
     def representation(self):
-        """str: "theta-series" or "elliptic-integral" for an asymmetric top, else "closed-form"."""
         return _REPRESENTATION_NAMES.get(self._rotor.getRepresentation(), "closed-form")
 
     @property
     def energy(self):
-        """float: The rotational kinetic energy, 1/2 sum I_k omega_k^2 (mass x length^2 / time^2)."""
         return self._rotor.getEnergy()
 
     @property
     def parameter(self):
-        """float: The elliptic parameter m (0 <= m <= 1) of an asymmetric top's motion; 0 for other kinds."""
         return self._rotor.getParameter()
 
     @property
     def angularMomentum(self):
-        """numpy.ndarray, shape (3,): The angular momentum in the body frame at t = 0 (mass x length^2 / time)."""
         return self._angularMomentum.copy()
 
     @property
     def moments(self):
-        """numpy.ndarray, shape (3,): The principal moments of inertia (mass x length^2)."""
         return self._moments.copy()
 
     @property
     def omega(self):
-        """numpy.ndarray, shape (3,): The body-frame angular velocity at t = 0 (1/time).
-
-        For a linear body, the component along its axis is removed: it carries no motion.
-        """
         return self._omega.copy()
 
     @property
     def attitude(self):
-        """numpy.ndarray, shape (3, 3): The lab-to-body rotation matrix at t = 0."""
         return self._attitude.copy()
 
     def __repr__(self):
@@ -167,3 +118,18 @@ class FreeRotor:
 
     def __reduce__(self):
         return (FreeRotor, (self._moments, self._omega, self._attitude, self._requestedRepresentation))
+
+
+# Each property documents the C++ getter it reads, with its Python type first (numpy's convention).
+for _name, _pythonType, _getter, _note in (
+        ("kind", "str", _Cpp.getKind, 'In Python its name: "linear", "spherical", "symmetric" or "asymmetric".'),
+        ("representation", "str", _Cpp.getRepresentation,
+         'In Python by name: "theta-series" or "elliptic-integral", and "closed-form" for the other kinds.'),
+        ("energy", "float", _Cpp.getEnergy, None),
+        ("parameter", "float", _Cpp.getParameter, None),
+        ("angularMomentum", "numpy.ndarray, shape (3,)", _Cpp.getAngularMomentum, None),
+        ("moments", "numpy.ndarray, shape (3,)", _Cpp.getMoments, None),
+        ("omega", "numpy.ndarray, shape (3,)", _Cpp.getOmega, None),
+        ("attitude", "numpy.ndarray, shape (3, 3)", _Cpp.getAttitude, None)):
+    setattr(FreeRotor, _name, property(getattr(FreeRotor, _name).fget, doc=_pythonapi.propertyDoc(_pythonType, _getter, _note)))
+del _name, _pythonType, _getter, _note

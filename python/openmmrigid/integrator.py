@@ -24,6 +24,7 @@ import sys
 
 import openmm
 
+from . import _pythonapi
 from . import openmmrigid as _swig
 
 __all__ = ["RigidBodyIntegrator", "RigidBodyLangevinIntegrator", "RigidBodyIntegratorBase", "deserializeIntegrator",
@@ -33,6 +34,11 @@ RigidBodyIntegratorBase = _swig.RigidBodyIntegratorBase
 RigidBodyIntegrator = _swig.RigidBodyIntegrator
 RigidBodyLangevinIntegrator = _swig.RigidBodyLangevinIntegrator
 getSupportedPlatforms = _swig.getSupportedPlatforms
+
+# The docstrings are the headers' Doxygen (SWIG's -doxygen); _pythonapi adds the unit conversions and
+# the notes about them, and writes the sections in numpy style.
+_pythonapi.applyToClasses(RigidBodyIntegratorBase, RigidBodyIntegrator, RigidBodyLangevinIntegrator)
+getSupportedPlatforms.__doc__ = _pythonapi.numpyStyle(getSupportedPlatforms.__doc__)
 
 _KERNEL_NAME = "IntegrateRigidBodyStep"
 

@@ -1,5 +1,6 @@
-// OpenMMRigid::Special as module functions. The Python-facing versions, with m1 = 1 - m by default,
-// are in openmmrigid/special.py. Declarations copied from numerics/Elliptic.h (same signatures).
+// OpenMMRigid::Special's public functions as module functions, with their declarations and Doxygen
+// (the docstrings, by SWIG's -doxygen) from numerics/Elliptic.h itself. The Python-facing versions,
+// with m1 = 1 - m by default, are in openmmrigid/special.py.
 
 %{
 #include "numerics/Elliptic.h"
@@ -17,16 +18,15 @@
     if ($result == NULL)
         SWIG_fail;
 }
+%typemap(doctype) void jacobiElliptic "tuple of float"
 
-namespace OpenMMRigid {
-namespace Special {
-
-void jacobiElliptic(double u, double m, double m1, double& sn, double& cn, double& dn);
-double ellipticK(double m, double m1);
-double ellipticF(double x, double m, double m1);
-double ellipticPi(double n, double x, double m, double m1);
-double carlsonRF(double x, double y, double z);
-double carlsonRJ(double x, double y, double z, double p);
-
-} // namespace Special
-} // namespace OpenMMRigid
+// Only the six public entry points: the header's helpers (detail::, the *FromJacobi forms, RC) stay C++.
+%rename("$ignore", %$isfunction) "";
+%rename("%s") OpenMMRigid::Special::jacobiElliptic;
+%rename("%s") OpenMMRigid::Special::ellipticK;
+%rename("%s") OpenMMRigid::Special::ellipticF;
+%rename("%s") OpenMMRigid::Special::ellipticPi;
+%rename("%s") OpenMMRigid::Special::carlsonRF;
+%rename("%s") OpenMMRigid::Special::carlsonRJ;
+%include "numerics/Elliptic.h"
+%rename("%s", %$isfunction) "";

@@ -44,6 +44,12 @@ inline void requireParameter(const char* function, double m, double m1) {
  * Carlson's symmetric integral RF(x, y, z) = 1/2 int_0^inf dt / sqrt((t+x)(t+y)(t+z)) for
  * x, y, z >= 0 with at most one of them zero (DLMF 19.16.1), by the duplication theorem
  * (DLMF 19.26.18) and the seventh-order Taylor expansion of DLMF 19.36.1.
+ *
+ * @param x  the first argument, non-negative
+ * @param y  the second argument, non-negative
+ * @param z  the third argument, non-negative; at most one of x, y, z may be zero
+ * @return RF(x, y, z)
+ * @throws std::invalid_argument for arguments outside that domain
  */
 inline double carlsonRF(double x, double y, double z) {
     if (!(x >= 0.0 && y >= 0.0 && z >= 0.0))
@@ -72,6 +78,13 @@ inline double carlsonRCOnePlus(double e, double onePlusE) {
  * The argument of each RC term is e = prod_k (sqrt(p) - sqrt(x_k)) / (sqrt(p) + sqrt(x_k)) (the
  * ratio delta 4^-3n / d_n^2 of Carlson's paper, factored); 1 + e is formed from the complements
  * a_k = 1 - |ratio_k| so that it keeps full precision when p is far from x, y, z and e nears -1.
+ *
+ * @param x  the first argument, non-negative
+ * @param y  the second argument, non-negative
+ * @param z  the third argument, non-negative; at most one of x, y, z may be zero
+ * @param p  the fourth argument, positive
+ * @return RJ(x, y, z, p)
+ * @throws std::invalid_argument for arguments outside that domain
  */
 inline double carlsonRJ(double x, double y, double z, double p) {
     if (!(x >= 0.0 && y >= 0.0 && z >= 0.0 && p > 0.0))
@@ -81,7 +94,14 @@ inline double carlsonRJ(double x, double y, double z, double p) {
     return rigidCarlsonRJ(x, y, z, p);
 }
 
-/** The complete elliptic integral of the first kind K(m) = pi / (2 AGM(1, sqrt(m1))) (DLMF 19.8.5). */
+/**
+ * The complete elliptic integral of the first kind K(m) = pi / (2 AGM(1, sqrt(m1))) (DLMF 19.8.5).
+ *
+ * @param m   the parameter, 0 <= m <= 1
+ * @param m1  its complement 1 - m, 0 <= m1 <= 1 (pass it when it is known more precisely than 1 - m)
+ * @return K(m), infinite for m = 1
+ * @throws std::invalid_argument for m or m1 outside [0, 1]
+ */
 inline double ellipticK(double m, double m1) {
     detail::requireParameter("ellipticK", m, m1);
     return rigidEllipticK(m1);
@@ -100,6 +120,13 @@ inline double ellipticFFromJacobi(double sn, double cn2, double dn2) {
 /**
  * The incomplete elliptic integral of the first kind F(x|m) = int_0^x dt / sqrt((1-t^2)(1-m t^2)) for
  * -1 <= x <= 1, i.e. F(phi|m) with x = sin(phi) (DLMF 19.2.4; van Zon & Schofield (2007) eq. (3.42)).
+ * Then F(sn(u|m)|m) = u for |u| <= K(m).
+ *
+ * @param x   the upper limit, -1 <= x <= 1
+ * @param m   the parameter, 0 <= m <= 1
+ * @param m1  its complement 1 - m, 0 <= m1 <= 1 (pass it when it is known more precisely than 1 - m)
+ * @return F(x|m)
+ * @throws std::invalid_argument for arguments outside that domain
  */
 inline double ellipticF(double x, double m, double m1) {
     detail::requireParameter("ellipticF", m, m1);
@@ -124,6 +151,13 @@ inline double ellipticPiFromJacobi(double n, double sn, double cn2, double dn2) 
  * The incomplete elliptic integral of the third kind
  * Pi(n; x|m) = int_0^x dt / ((1 - n t^2) sqrt((1-t^2)(1-m t^2))) for -1 <= x <= 1 and n x^2 < 1
  * (DLMF 19.2.7 with x = sin(phi); DLMF's alpha^2 is n).
+ *
+ * @param n   the characteristic, with n x^2 < 1
+ * @param x   the upper limit, -1 <= x <= 1
+ * @param m   the parameter, 0 <= m <= 1
+ * @param m1  its complement 1 - m, 0 <= m1 <= 1 (pass it when it is known more precisely than 1 - m)
+ * @return Pi(n; x|m)
+ * @throws std::invalid_argument for arguments outside that domain
  */
 inline double ellipticPi(double n, double x, double m, double m1) {
     detail::requireParameter("ellipticPi", m, m1);
@@ -164,6 +198,14 @@ inline double ellipticPi(double n, double x, double m, double m1) {
  * exponentially small over most of the period. m = 0 and m = 1 are the trigonometric and hyperbolic
  * limits (DLMF 22.5(ii)). Below m1 = 1e-32 the levels with k_n = 1 to machine precision would
  * double the rounding error of cn at each level, so jacobiEllipticNearOne() takes over there.
+ *
+ * @param u   the argument, finite
+ * @param m   the parameter, 0 <= m <= 1
+ * @param m1  its complement 1 - m, 0 <= m1 <= 1 (pass it when it is known more precisely than 1 - m)
+ * @param[out] sn  sn(u|m)
+ * @param[out] cn  cn(u|m)
+ * @param[out] dn  dn(u|m)
+ * @throws std::invalid_argument for a non-finite u, or m or m1 outside [0, 1]
  */
 inline void jacobiElliptic(double u, double m, double m1, double& sn, double& cn, double& dn) {
     detail::requireParameter("jacobiElliptic", m, m1);

@@ -22,6 +22,15 @@
 
 namespace OpenMMRigid {
 
+/**
+ * The exact torque-free motion of a rigid body. Its angular velocity and attitude at any time follow
+ * in closed form from the initial state: Jacobi elliptic functions and either a theta series or an
+ * elliptic integral of the third kind for an asymmetric top (R. van Zon and J. Schofield, J. Comput.
+ * Phys. 225, 145 (2007)), elementary functions for linear, spherical and symmetric tops. This is the
+ * rotational half of the free drift of the integrators, exposed for checks and diagnostics.
+ *
+ * All quantities may be in any consistent units (for example amu nm^2, 1/ps and ps).
+ */
 class FreeRotor {
 public:
     enum Kind { Linear = RigidKindLinear, Spherical = RigidKindSpherical, Symmetric = RigidKindSymmetric,
@@ -34,25 +43,33 @@ public:
     /**
      * Create the rotor from its initial state.
      *
-     * @param moments         the three principal moments of inertia, in any order. One may be zero if
-     *                        the other two are equal (a linear rotor).
-     * @param omega           the angular velocity in the body (principal-axis) frame at t = 0
-     * @param attitude        the lab-to-body rotation matrix A(0), orthonormal with determinant +1
-     * @param representation  how an asymmetric top evaluates its precession angle (see numerics/core/CoreRotor.h)
+     * @param moments         the three principal moments of inertia (mass x length^2), non-negative, in
+     *                        any order. One may be zero if the other two are equal: a linear rotor, whose
+     *                        zero moment marks its axis.
+     * @param omega           the angular velocity in the body (principal-axis) frame at t = 0 (1/time)
+     * @param attitude        the lab-to-body rotation matrix A(0), orthonormal with determinant +1, so
+     *                        that A v_lab gives body components
+     * @param representation  how an asymmetric top evaluates its rotation angle: Automatic picks the
+     *                        cheaper of the two exact forms, ThetaSeries and EllipticIntegral force one
+     *                        of them, for diagnostics (numerics/core/CoreRotor.h). Ignored for the other
+     *                        kinds.
      * @param checkInput      whether to check that the input is finite and the attitude a rotation. Only
      *                        a caller that guarantees both (the integrator, whose attitudes are kept
      *                        orthonormal and whose momenta are checked every step) may skip it.
-     * @throws std::invalid_argument naming the problem, for non-finite or inconsistent input
+     * @throws std::invalid_argument naming the problem, for non-finite or inconsistent input (a negative
+     *         moment, moments that are no rotor, an attitude that is not a rotation), or a forced
+     *         representation that cannot describe this motion
      */
     FreeRotor(const Vector3& moments, const Vector3& omega, const Matrix3& attitude = identityMatrix(),
               Representation representation = Automatic, bool checkInput = true);
 
     /**
-     * The state at time t (any sign, measured in the time unit of omega).
+     * Get the state at time t.
      *
-     * @param t         the time
-     * @param omega     on exit, the body-frame angular velocity omega(t)
-     * @param attitude  on exit, the attitude matrix A(t)
+     * @param t              the time from the initial state (any sign, in the time unit of omega)
+     * @param[out] omega     the body-frame angular velocity omega(t) (1/time)
+     * @param[out] attitude  the lab-to-body rotation matrix A(t)
+     * @throws std::invalid_argument if t is not finite
      */
     void evolve(double t, Vector3& omega, Matrix3& attitude) const;
 
@@ -75,25 +92,34 @@ public:
      */
     static RigidShape classify(const Vector3& moments);
 
+    /** Get the kind of rotor, from its principal moments (rigidClassifyMoments()): Linear, Spherical, Symmetric or Asymmetric. */
     Kind getKind() const { return static_cast<Kind>(rotor.kind); }
+    /** Get the name of a kind: "linear", "spherical", "symmetric" or "asymmetric". */
     static const char* kindName(Kind kind) {
         static const char* names[] = {"linear", "spherical", "symmetric", "asymmetric"};
         return names[kind];
     }
-    /** The representation an asymmetric top uses (never Automatic); Automatic for the other kinds. */
+    /** Get the representation an asymmetric top uses (never Automatic); Automatic for the other kinds. */
     Representation getRepresentation() const { return static_cast<Representation>(rotor.representation); }
-    /** The rotational kinetic energy 1/2 sum_k I_k omega_k^2. */
+    /** Get the rotational kinetic energy 1/2 sum_k I_k omega_k^2 (mass x length^2 / time^2). */
     double getEnergy() const { return rotor.energy; }
-    /** The angular momentum in the body frame at t = 0, I_k omega_k. */
+    /** Get the angular momentum in the body frame at t = 0, I_k omega_k (mass x length^2 / time). */
     Vector3 getAngularMomentum() const {
         return {moments[0]*omega0[0], moments[1]*omega0[1], moments[2]*omega0[2]};
     }
-    /** The moments the motion uses: the given ones, with those the classification found equal (or zero) made exactly so. */
+    /**
+     * Get the principal moments of inertia the motion uses: the given ones, with those the
+     * classification found equal (or zero) made exactly so.
+     */
     const Vector3& getMoments() const { return moments; }
-    /** The initial angular velocity; for a linear rotor its component along the axis is removed. */
+    /**
+     * Get the body-frame angular velocity at t = 0; for a linear rotor its component along the axis
+     * is removed (it carries no motion).
+     */
     const Vector3& getOmega() const { return omega0; }
+    /** Get the lab-to-body rotation matrix at t = 0. */
     const Matrix3& getAttitude() const { return attitude0; }
-    /** The elliptic parameter m of an asymmetric top (vZS eq. (3.40)); 0 for the other kinds. */
+    /** Get the elliptic parameter m (0 <= m <= 1) of an asymmetric top's motion (vZS eq. (3.40)); 0 for the other kinds. */
     double getParameter() const { return rotor.m; }
     /** The core's rotor, for a caller that evaluates it with rigidRotorEvolve() itself. */
     const RigidRotor& getCore() const { return rotor; }
