@@ -45,11 +45,16 @@ namespace OpenMMRigid {
  * Velocities are those of LangevinMiddleIntegrator: the Context holds the velocities after the
  * Ornstein-Uhlenbeck step and the second half drift, half a step behind the positions
  * (getVelocityTimeOffset() is dt/2), and the kinetic energy, the temperature and the translational
- * and rotational kinetic energies are theirs. Their distribution is canonical: for a harmonic mode
+ * and rotational kinetic energies are theirs. For a harmonic mode their distribution is canonical:
  * the sampled m <v^2> is exactly kT at any stable step, where BAOAB's on-step velocities read it low
  * by the factor 1 - (omega dt)^2/4. For rigid water, whose librations are its stiffest modes, the
  * rotational temperature of the on-step velocities reads several percent low at 4 fs, while that of
- * these velocities reads the bath's (the README gives the measurements). Velocities one sets are
+ * these velocities reads the bath's. For anharmonic modes BAOAB's momenta keep an error of order
+ * dt^2 at every point of the step: in rigid water at 8 fs (friction 1/ps) the libration about the
+ * axis of least moment reads about 7 % hot, the translation 1 to 2 % cold, and the reported
+ * temperature 1 to 2 % hot (LangevinMiddleIntegrator + SETTLE: the same libration, 3 % hot in all),
+ * while the configurational averages stay those of the small steps (the README and
+ * docs/results/thermostat_temperature.md give the measurements). Velocities one sets are
  * taken as such half-step velocities (setVelocitiesToTemperature() shifts them by half a kick, as for
  * LangevinMiddleIntegrator).
  *
