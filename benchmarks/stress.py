@@ -65,7 +65,7 @@ sys.path.insert(0, str(ROOT / "tests" / "python"))
 
 import openmmrigid  # noqa: E402
 import stress_systems as stress  # noqa: E402
-from reporting import closeLog, openLog, say  # noqa: E402
+from benchmarking import closeLog, openLog, say  # noqa: E402
 import systems  # noqa: E402
 
 ENERGY_BUDGET = 0.01          # of the initial kinetic energy
