@@ -86,12 +86,14 @@ def alanineDipeptidePdb():
     return "\n".join(lines + ["TER", "END"]) + "\n"
 
 
-def buildSolvatedPeptide(edge):
+def buildSolvatedPeptide(edge, platform):
     """Topology, positions and System of alanine dipeptide in TIP4P-Ew water, and the peptide's atom indices."""
     forceField = app.ForceField("amber14-all.xml", "amber14/tip4pew.xml")
     peptide = app.PDBFile(io.StringIO(alanineDipeptidePdb()))
     modeller = app.Modeller(peptide.topology, peptide.positions)
-    modeller.addHydrogens(forceField)
+    # addHydrogens minimizes the hydrogens on the platform given (by default the fastest one there is,
+    # which may be a GPU platform whose minimizer fails, as OpenCL's on PoCL does).
+    modeller.addHydrogens(forceField, platform=platform)
     solute = list(range(modeller.topology.getNumAtoms()))  # the peptide comes first, the waters after it
     topology, positions, system = testing.waterBox("tip4pew", edge=edge, forceField=forceField, solute=modeller,
                                                    constraints=app.HBonds)
@@ -144,7 +146,7 @@ def main():
     started = time.perf_counter()
 
     platform = openmm.Platform.getPlatformByName(args.platform)
-    topology, positions, system, solute = buildSolvatedPeptide(args.box)
+    topology, positions, system, solute = buildSolvatedPeptide(args.box, platform)
     waters = topology.getNumResidues() - 3
     soluteConstraints = sum(1 for k in range(system.getNumConstraints()) if system.getConstraintParameters(k)[0] < len(solute))
     print(f"alanine dipeptide ({len(solute)} atoms, {soluteConstraints} constraints on bonds to H) in {waters} TIP4P-Ew "

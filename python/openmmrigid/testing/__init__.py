@@ -16,6 +16,10 @@ Systems
 Running and measuring
     equilibrateByRedraws(), compressBox(), sampleNVE(), energyDrift(), blockAverage(),
     rigidTemperatures(), shapeDeviations(), bodyKinds(), degreesOfFreedom().
+
+openmmrigid.testing.stress
+    The stability stress scenarios (extreme body shapes in a hot bath, a fast spinning body, hot
+    clusters and water) and their measurements, shared by benchmarks/stress.py and the test suite.
 """
 
 import dataclasses
