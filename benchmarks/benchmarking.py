@@ -63,7 +63,7 @@ def say(text=""):
         _log.write(text + "\n")
         _log.flush()
     if _captured is not None:
-        _captured.append(text)
+        _captured.extend(text.split("\n"))
 
 
 def stamp(text):

@@ -664,19 +664,8 @@ def printHeader(args, platform):
     say()
 
 
-def main():
-    args = parseArguments()
-    args.output.parent.mkdir(parents=True, exist_ok=True)
-    openLog(f"{args.output}.log")
-    platform = openmm.Platform.getPlatformByName(args.platform)
-    properties = cpuProperties(platform, args.threads)
-    printHeader(args, platform)
-    name = args.output.name
-    document = ResultsDocument(name, "Energy conservation against stock Verlet + SETTLE (NVE)", quick=args.quick,
-                               platform=platform.getName(), threads=args.threads,
-                               about="Method: the docstring of `benchmarks/energy_drift.py`.")
-    started = time.perf_counter()
-
+def runAll(args, platform, properties, started):
+    """Build and equilibrate every box, then run every method at every step; returns the rows."""
     boxes, equilibrations = [], []
     for key in args.models:
         stamp(f"{MODELS[key].label}: building {args.molecules} waters, minimizing, timing a few steps")
@@ -688,7 +677,6 @@ def main():
     estimate = estimateSeconds(boxes, args)
     stamp(f"estimated total: {(time.perf_counter() - started + estimate)/60:.0f} min if every series stays stable "
           f"(less where one blows up); other work on these cores slows it")
-
     rows = []
     for index, box in enumerate(boxes):
         stamp(f"{MODELS[box.key].label}: {args.equilibrate:g} ps Langevin equilibration at {TEMPERATURE:g} K")
@@ -706,11 +694,12 @@ def main():
                 if row["blew_up"]:
                     break  # larger steps of this series are skipped
         box.state = None
+    return rows
 
-    with document.capture():
-        printTable(rows, args)
-    say()
-    writeCsv(Path(f"{args.output}.csv"), rows)
+
+def plotAll(rows, args, platform, document):
+    """The figures of the run; returns (path, caption) of each."""
+    name = args.output.name
     title = (f"openmm-rigid NVE, {args.molecules} waters, PME, {args.time:g} ps per run, {platform.getName()}, "
              f"OpenMM {openmm.version.full_version}, {datetime.date.today()}{' (quick)' if args.quick else ''}")
     figures = [(document.figurePath(f"{name}_drift.png"), "drift"),
@@ -724,6 +713,25 @@ def main():
         figures.append((document.figurePath(f"{name}_forces.png"), "fluctuation against force evaluations per ps"))
         plotWorkPrecision(rows, args, figures[-1][0], title, "force_evaluations_per_ps",
                           "force evaluations per simulated ps")
+    return figures
+
+
+def main():
+    args = parseArguments()
+    openLog(f"{args.output}.log")
+    platform = openmm.Platform.getPlatformByName(args.platform)
+    properties = cpuProperties(platform, args.threads)
+    printHeader(args, platform)
+    document = ResultsDocument(args.output.name, "Energy conservation against stock Verlet + SETTLE (NVE)",
+                               quick=args.quick, platform=platform.getName(), threads=args.threads,
+                               about="Method: the docstring of `benchmarks/energy_drift.py`.")
+    started = time.perf_counter()
+    rows = runAll(args, platform, properties, started)
+    with document.capture():
+        printTable(rows, args)
+    say()
+    writeCsv(Path(f"{args.output}.csv"), rows)
+    figures = plotAll(rows, args, platform, document)
     with document.capture():
         levels = equalAccuracy(rows, args)
     if levels:
