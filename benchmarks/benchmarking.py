@@ -80,9 +80,11 @@ class Progress:
         self.terminal = sys.stdout.isatty()
 
     def update(self, done):
+        if done <= 0:
+            return
         fraction = done/self.total
         elapsed = time.perf_counter() - self.started
-        left = elapsed*(1 - fraction)/fraction if fraction > 0 else float("nan")
+        left = elapsed*(1 - fraction)/fraction
         bar = "#"*int(20*fraction) + "-"*(20 - int(20*fraction))
         text = f"  {self.label} [{bar}] {100*fraction:3.0f} %, {elapsed:.0f} s, about {left:.0f} s left"
         if self.terminal:
