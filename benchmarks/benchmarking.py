@@ -185,7 +185,8 @@ class ResultsDocument:
         self.name, self.quick = name, quick
         self.path = (RESULTS if quick else DOCUMENTS)/f"{name}.md"
         self.lines = [f"# {title}", "",
-                      f"Written by `benchmarks/{name}.py`{' (a --quick smoke run: not a measurement)' if quick else ''}.",
+                      f"Written by `benchmarks/{Path(sys.argv[0]).name}`"
+                      f"{' (a --quick smoke run: not a measurement)' if quick else ''}.",
                       ""]
         self.lines += [f"- {line}" for line in (provenance or header(platform, threads))] + [""]
         if about:
