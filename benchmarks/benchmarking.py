@@ -296,6 +296,19 @@ def blockMean(values, blocks=(5, 10)):
     return values.mean(axis=0), error
 
 
+def molecularKineticEnergies(velocities, masses, molecules):
+    """Translational kinetic energy of the molecules' centres of mass and the rest (kJ/mol): for rigid
+    molecules (velocities that are rigid motion, as constraints or a rigid-body integrator leave them)
+    the rest is the rotational kinetic energy. velocities (particles x 3, nm/ps), masses (particles,
+    amu), molecules (molecules x atoms per molecule: indices of their massive particles)."""
+    m = masses[molecules]                                       # (N, k)
+    v = velocities[molecules]                                   # (N, k, 3)
+    centre = np.einsum("na,nak->nk", m, v)/m.sum(axis=1)[:, None]
+    translational = 0.5*np.sum(m.sum(axis=1)*np.sum(centre**2, axis=1))
+    total = 0.5*np.sum(m[:, :, None]*v**2)
+    return translational, total - translational
+
+
 def slopeError(times, values, blocks=10):
     """Standard error of the slope of a time series, from the line through the means of `blocks`
     consecutive blocks (the fit to every sample would understate it for correlated samples)."""

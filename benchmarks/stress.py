@@ -184,7 +184,7 @@ def water_scan(args, model):
                 break
             best = fs
         largest[name] = best
-    say(f"  largest stable step in the scan: " + ", ".join(f"{name} {fs} fs" for name, fs in largest.items()))
+    say("  largest stable step in the scan: " + ", ".join(f"{name} {fs} fs" for name, fs in largest.items()))
     final = {}
     for name in (STOCK, "Exact", "NoSquish"):
         fs = largest[name]

@@ -42,8 +42,8 @@ import openmm
 from openmm import app, unit
 
 import openmmrigid
-from benchmarking import (RESULTS, ResultsDocument, blockMean, cpuProperties, header, openLog, pyplot, radialDistribution,
-                          say, saveFigure, stamp, writeCsv)
+from benchmarking import (RESULTS, ResultsDocument, blockMean, cpuProperties, header, molecularKineticEnergies, openLog,
+                          pyplot, radialDistribution, say, saveFigure, stamp, writeCsv)
 
 TEMPERATURE = 300*unit.kelvin
 FRICTION = 1/unit.picosecond
@@ -80,22 +80,12 @@ class Molecules:
             self.atoms.append(massive)
             self.oxygens.extend(atom.index for atom in residue.atoms() if atom.element == app.element.oxygen)
         self.atoms = np.array(self.atoms)                         # (N, 3): O, H, H
-        self.masses = np.array([[system.getParticleMass(int(i)).value_in_unit(unit.dalton) for i in row]
-                                for row in self.atoms])
+        self.particleMasses = np.array([system.getParticleMass(i).value_in_unit(unit.dalton)
+                                        for i in range(system.getNumParticles())])
+        self.masses = self.particleMasses[self.atoms]
         self.oxygens = np.array(self.oxygens)
         self.count = len(self.atoms)
         self.totalMass = self.masses.sum()
-
-    def kineticEnergies(self, velocities):
-        """Translational (centres of mass) and rotational (the rest) kinetic energy, kJ/mol."""
-        v = velocities[self.atoms]                                # (N, 3, 3)
-        momentum = np.einsum("na,nak->nk", self.masses, v)
-        molecularMass = self.masses.sum(axis=1)
-        centre = momentum/molecularMass[:, None]
-        translational = 0.5*np.sum(molecularMass*np.sum(centre**2, axis=1))
-        relative = v - centre[:, None, :]
-        rotational = 0.5*np.sum(self.masses[:, :, None]*relative**2)
-        return translational, rotational
 
 
 def equilibratedState(system, positions, platform, properties, time_ps, stepFs):
@@ -147,7 +137,7 @@ def simulate(system, state, molecules, platform, properties, kind, stepFs, equil
         box = current.getPeriodicBoxVectors(asNumpy=True).value_in_unit(unit.nanometer)
         volume = np.linalg.det(box)
         velocities = current.getVelocities(asNumpy=True).value_in_unit(unit.nanometer/unit.picosecond)
-        translational, rotational = molecules.kineticEnergies(velocities)
+        translational, rotational = molecularKineticEnergies(velocities, molecules.particleMasses, molecules.atoms)
         data["density"].append(molecules.totalMass/volume*AMU_PER_NM3_IN_G_PER_ML)
         data["potential"].append(current.getPotentialEnergy().value_in_unit(unit.kilojoule_per_mole)/molecules.count)
         data["translational"].append(2*translational/((3*molecules.count - 3)*BOLTZMANN))

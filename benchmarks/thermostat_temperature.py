@@ -35,7 +35,8 @@ import openmm
 from openmm import app, unit
 
 import openmmrigid
-from benchmarking import RESULTS, ResultsDocument, blockMean, cpuProperties, openLog, say, stamp, writeCsv
+from benchmarking import (RESULTS, ResultsDocument, blockMean, cpuProperties, molecularKineticEnergies, openLog, say, stamp,
+                          writeCsv)
 
 TEMPERATURE = 300.0
 BOLTZMANN = unit.MOLAR_GAS_CONSTANT_R.value_in_unit(unit.kilojoule_per_mole/unit.kelvin)
@@ -77,13 +78,8 @@ def kineticParts(context, integrator, masses, molecules):
     if hasattr(integrator, "getTranslationalKineticEnergy"):
         return (integrator.getTranslationalKineticEnergy().value_in_unit(unit.kilojoule_per_mole),
                 integrator.getRotationalKineticEnergy().value_in_unit(unit.kilojoule_per_mole))
-    v = context.getState(getVelocities=True).getVelocities(asNumpy=True).value_in_unit(unit.nanometer/unit.picosecond)
-    m = masses[molecules]                       # (N, 3)
-    vm = v[molecules]                           # (N, 3, 3)
-    centre = np.einsum("na,nak->nk", m, vm)/m.sum(axis=1)[:, None]
-    translational = 0.5*np.sum(m.sum(axis=1)*np.sum(centre**2, axis=1))
-    total = 0.5*np.sum(m[:, :, None]*vm**2)
-    return translational, total - translational
+    velocities = context.getState(getVelocities=True).getVelocities(asNumpy=True)
+    return molecularKineticEnergies(velocities.value_in_unit(unit.nanometer/unit.picosecond), masses, molecules)
 
 
 def run(system, state, kind, stepFs, production, masses, molecules, platform, properties):
