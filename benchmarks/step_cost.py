@@ -11,7 +11,7 @@ nothing else is inside the timed region. Reported: the median ms/step of each an
 
 Part 2, the integrator alone: Systems of N (8000) rigid bodies with no forces at all (a System with
 particles and, for water, its constraints: the cheapest force evaluation there is; a zero-energy
-CustomExternalForce still loops over the particles, about 28 ns/particle/step more on one thread),
+CustomExternalForce would still loop over the particles),
 random orientations, velocities from setVelocitiesToTemperature(300 K). Body kinds: water (TIP3P
 geometry, asymmetric, bodies found from the constraints) and, as explicit bodies, linear CO2 (3
 collinear particles), a spherical CH4-like top (centre + 4 tetrahedral H), a symmetric NH3-like top

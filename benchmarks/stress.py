@@ -38,7 +38,7 @@ Criteria (each run prints one line; a run of a rigid integrator fails if any is 
   - alone (no forces), Exact keeps the spinning body's energy to 1e-12 relative and follows its
     exact free motion (openmmrigid.FreeRotor from its starting state) to 1e-12 rad per radian
     turned: the rotation frequency is known to the rounding of the energy, so the angle's error
-    grows with the angle turned (seen: 1e-14 to 1e-13 per radian). In the bath scenarios at least a
+    grows with the angle turned. In the bath scenarios at least a
     few separatrix crossings must be seen.
 Stock Verlet + SETTLE is measured by the same yardstick and reported, but never fails the run.
 
