@@ -98,13 +98,15 @@ class Progress:
 # Provenance
 
 def commit():
-    """The source tree's commit (short), marked when tracked files differ from it."""
+    """The source tree's commit (short), marked when tracked files other than results differ from it."""
     try:
         head = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True,
                               text=True, check=True).stdout.strip()
-        dirty = subprocess.run(["git", "-C", str(ROOT), "status", "--porcelain", "--untracked-files=no"],
+        # Results documents and figures written by earlier runs do not make the code differ.
+        dirty = subprocess.run(["git", "-C", str(ROOT), "status", "--porcelain", "--untracked-files=no", "--", ".",
+                                ":!docs/results", ":!docs/figures"],
                                capture_output=True, text=True, check=True).stdout.strip()
-        return head + (" (with uncommitted changes)" if dirty else "")
+        return head + (" (with uncommitted changes to the code)" if dirty else "")
     except (OSError, subprocess.CalledProcessError):
         return "unknown"
 
