@@ -33,7 +33,7 @@ it) and reports:
   the rigid integrators' own kinetic energies;
 - cost: wall time of the step() calls alone, as ms/step, ns/day and seconds per simulated ps.
 
-    python benchmarks/energy_drift.py --quick        # TIP3P + TIP4P-Ew, 2/4/6 fs, 3 ps per run: a few minutes
+    python benchmarks/energy_drift.py --quick        # a smoke check: TIP3P + TIP4P-Ew, 2/4/6 fs, 1.5 ps per run
     python benchmarks/energy_drift.py                # TIP3P, SPC/E, TIP4P-Ew, 1 to 8 fs, 20 ps per run
     python benchmarks/energy_drift.py --models all   # the same with TIP5P as well
     python benchmarks/energy_drift.py --methods schemes --models tip4pew --molecules 2000 --time 4 \
@@ -593,7 +593,7 @@ def equalAccuracy(rows, args):
 def parseArguments():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--quick", action="store_true",
-                        help="TIP3P and TIP4P-Ew, 2/4/6 fs, 3 ps per run, 2 ps equilibration: a few minutes on 2 cores")
+                        help="a smoke check: TIP3P and TIP4P-Ew, 2/4/6 fs, 1.5 ps per run, 1 ps equilibration")
     parser.add_argument("--models", nargs="+", choices=list(MODELS) + ["all"],
                         help="water models, or all (default: tip3p spce tip4pew; quick: tip3p tip4pew). TIP5P is "
                              "left out by default because a TIP5P step costs 2.5 times a TIP3P step: with it the full "
@@ -603,9 +603,9 @@ def parseArguments():
                              f"splittings of RigidBodyIntegrator.setSplitting with stock; 'all': every one)")
     parser.add_argument("--steps", type=float, nargs="+", help="time steps in fs (default 1 to 8; quick: 2 4 6)")
     parser.add_argument("--molecules", type=int, default=500, help="waters per box (default 500)")
-    parser.add_argument("--time", type=float, help="simulated ps per NVE run (default 20; quick: 3)")
+    parser.add_argument("--time", type=float, help="simulated ps per NVE run (default 20; quick: 1.5)")
     parser.add_argument("--equilibrate", type=float,
-                        help="ps of Langevin equilibration per model, after minimization (default 5; quick: 2)")
+                        help="ps of Langevin equilibration per model, after minimization (default 5; quick: 1)")
     parser.add_argument("--sample-interval", type=float,
                         help="fs of simulated time between energy samples: the multiple of the step nearest to it "
                              "(default 48, exact but for 5 and 7 fs: 50, 49; quick: 24)")
@@ -630,8 +630,8 @@ def parseArguments():
     elif "schemes" in args.methods:
         args.methods = list(dict.fromkeys(SCHEMES + [m for m in args.methods if m != "schemes"]))
     args.steps = sorted(args.steps or ([2.0, 4.0, 6.0] if args.quick else [float(s) for s in range(1, 9)]))
-    args.time = args.time or (3.0 if args.quick else 20.0)
-    args.equilibrate = args.equilibrate if args.equilibrate is not None else (2.0 if args.quick else 5.0)
+    args.time = args.time or (1.5 if args.quick else 20.0)
+    args.equilibrate = args.equilibrate if args.equilibrate is not None else (1.0 if args.quick else 5.0)
     args.sample_interval = args.sample_interval or (24.0 if args.quick else 48.0)
     args.output = Path(args.output or RESULTS/("energy_drift_quick" if args.quick else "energy_drift"))
     if args.molecules < 1 or args.time <= 0 or args.sample_interval <= 0 or min(args.steps) <= 0:
