@@ -1,107 +1,77 @@
 #!/usr/bin/env python
 """Energy conservation of RigidBodyIntegrator against stock Verlet + SETTLE, over step sizes (NVE).
 
-Rigid-water boxes of 500 molecules (openmm.app ForceField + Modeller, PME with a 0.9 nm cutoff and
-Ewald error tolerance 5e-4, rigidWater=True, the force field's default CMMotionRemover) of TIP3P,
-SPC/E, TIP4P-Ew and, on request, TIP5P are each minimized and equilibrated once with a stock
+Rigid-water boxes of 500 molecules (openmmrigid.testing.waterBox: openmm.app, PME with a 0.9 nm
+cutoff and Ewald error tolerance 5e-4, rigidWater=True, the force field's CMMotionRemover) of
+TIP3P, SPC/E, TIP4P-Ew and, on request, TIP5P are each minimized and equilibrated once with a stock
 LangevinMiddleIntegrator at 300 K (5/ps, 2 fs, SETTLE; on the CPU platform with one thread and
-deterministic forces, so that --seed repeats it exactly), and that state made rigid to 1e-10
-(constraints and velocity constraints). From that one state (positions and velocities) every
-method runs NVE at each step size, in its own Context, all in this one process:
+deterministic forces, so that --seed repeats it exactly), and that state made rigid to 1e-10. From
+that one state every method runs NVE at each step size, in its own Context, in this one process:
 
-    stock      openmm.VerletIntegrator + SETTLE, constraint tolerance 1e-10 (constraints and
-               velocity constraints applied to the starting state with the same tolerance)
+    stock      openmm.VerletIntegrator + SETTLE, constraint tolerance 1e-10
     Exact      openmmrigid.RigidBodyIntegrator, setRotationMethod(RigidBodyIntegrator.Exact)
     NoSquish   openmmrigid.RigidBodyIntegrator, setRotationMethod(RigidBodyIntegrator.NoSquish)
+    Omelyan2, Yoshida4, Omelyan4 (--methods schemes): the other splittings, Exact drift
 
-(the table METHODS below; each entry builds the integrator for a step size and says how many
-force evaluations a step costs, so schemes with several can be added and compared per force
-evaluation). A series (one method, one model) stops at the first unstable step size; larger steps
-are skipped. Unstable: an exception, a non-finite energy, or |E(t) - E(0)| above --threshold
-(default 1 kJ/mol per molecule: about 13 K of heating at the heat capacity of liquid water,
-75 J/mol/K; about 20 times the largest fluctuation of a stable run seen, 0.055 kJ/mol per molecule,
-stock SPC/E at 8 fs; in a 20 ps run, a steady drift of about 8 kJ/mol/ns per degree of freedom
-reaches it).
+(the table METHODS; each entry builds the integrator for a step size and says how many force
+evaluations a step costs). A series (one method, one model) stops at its first unstable step size:
+an exception, a non-finite energy, or |E(t) - E(0)| above --threshold kJ/mol per molecule (default 1:
+about 13 K of heating at the heat capacity of liquid water).
 
-What each run measures (the total energy E = potential + kinetic from the State, sampled every
---sample-interval fs of simulated time, 48 (quick: 24): every k steps, k*step the multiple of the
-step nearest to it, so the same interval for every step that divides it, 49 and 50 fs for 7 and 5):
-- drift: least-squares slope of E(t), in kJ/mol/ns per degree of freedom (6 per water less 3 for
-  the CMMotionRemover), with the standard error of the slope through 10 block means. In runs of a
-  few ps (quick mode) the blocks are too short to be independent and that error is too small: one
-  quick run gave NoSquish on TIP4P-Ew at 2 fs +0.38 +- 0.11, where 10 ps runs give all three
-  methods 0.02 to 0.04 +- 0.02. The NVE runs use the platform's usual multithreaded forces, which
-  are not bitwise repeatable, so repeated runs scatter within these errors (the equilibrated
-  starting state is repeatable);
-- fluctuation: standard deviation of E about the fitted line (kJ/mol, and per molecule). At 1 and
-  2 fs it has a floor that is not the integrator's: the Ewald direct-space term erfc(alpha r)/r is
-  cut off at 0.9 nm where, at tolerance 5e-4, it has not reached zero, so E jumps whenever a charged
-  pair crosses the cutoff. For 500 TIP3P waters at 1 fs the fluctuation is 1.0 kJ/mol at 5e-4 and
-  0.2 kJ/mol at 1e-5 (--ewald-tolerance; that costs about four times as much per step). The floor
-  grows with the charges: lowest for TIP5P (0.24 e on each site), highest for TIP4P-Ew (-1.05 e);
-- blow-up: whether and when (ps) the run became unstable, and why; the largest |E - E(0)|;
+Each run samples the total energy every --sample-interval fs (the multiple of the step nearest to
+it) and reports:
+- drift: least-squares slope of E(t), kJ/mol/ns per degree of freedom, with the standard error of
+  the slope through 10 block means (too small when the blocks are shorter than the energy's
+  correlation time, as in the quick mode's runs of a few ps);
+- fluctuation: standard deviation of E about the fitted line. At small steps it has a floor that is
+  the potential's, not the integrator's: the Ewald direct-space term is cut off at 0.9 nm before it
+  reaches zero (--ewald-tolerance lowers the floor, at a higher cost per step);
+- blow-up: whether and when the run became unstable, and why;
 - T_trans, T_rot: translational and rotational temperatures by equipartition (3N - 3 and 3N
-  degrees of freedom), averaged over the samples, computed for every method by the same function
-  from positions, velocities and masses: centre-of-mass velocities, and angular momenta through
-  the inertia tensors of the molecules. VerletIntegrator is a leapfrog whose State velocities lag
-  the positions by half a step; they are moved to the step with the State's forces and projected on
-  rigid motion, which reproduces the kinetic energy OpenMM reports. For the rigid integrators the
-  result is checked against getTranslationalKineticEnergy() and getRotationalKineticEnergy(). T_rot
-  falls as the step grows, for every method (10 to 30 K lower at 6 to 8 fs than at 1 to 2 fs): from
-  the same E(0), a Verlet-type integrator, which conserves a modified energy, holds O((omega dt)^2)
-  more of the measured E in the potential energy of the fast librations (frequency omega) and so
-  less as kinetic energy;
-- cost: wall time of the integrator.step() calls alone (getState() is timed apart and reported
-  separately; the first block, which includes the Context's setup, is left out), as ms/step, ns/day
-  and wall seconds per simulated ps. Other work on the same cores distorts it.
+  degrees of freedom), computed for every method by the same function from positions, velocities
+  and masses (stock Verlet's leapfrog velocities moved on by half a step first), checked against
+  the rigid integrators' own kinetic energies;
+- cost: wall time of the step() calls alone, as ms/step, ns/day and seconds per simulated ps.
 
-    python benchmarks/energy_drift.py --quick        # TIP3P + TIP4P-Ew, 2/4/6 fs, 3 ps per run: 2 to 4 minutes
-    python benchmarks/energy_drift.py                # TIP3P, SPC/E, TIP4P-Ew, 1 to 8 fs, 20 ps per run: about 32 minutes
-    python benchmarks/energy_drift.py --models all   # the same with TIP5P as well: about 55 minutes
-    python benchmarks/energy_drift.py --models tip3p --methods Exact NoSquish --steps 4 8 --time 10
+    python benchmarks/energy_drift.py --quick        # a smoke check: TIP3P + TIP4P-Ew, 2/4/6 fs, 1.5 ps per run
+    python benchmarks/energy_drift.py                # TIP3P, SPC/E, TIP4P-Ew, 1 to 8 fs, 20 ps per run
+    python benchmarks/energy_drift.py --models all   # the same with TIP5P as well
     python benchmarks/energy_drift.py --methods schemes --models tip4pew --molecules 2000 --time 4 \
-        --output benchmarks/results/schemes_tip4pew_2000  # the splittings (setSplitting), per force evaluation
+        --output benchmarks/results/schemes_tip4pew_2000  # the splittings, per force evaluation
 
-With --methods schemes (or any method that costs several force evaluations per step) it also plots the
-fluctuation against force evaluations per simulated ps, and for every accuracy level given by stock
-Verlet's fluctuation at 1 to 4 fs it prints which method and step give the most ns/day at that
-fluctuation or better (interpolated in log fluctuation between measured steps, never extrapolated),
-and the ratio to stock's ns/day: <output>_equal_accuracy.csv.
+With several force evaluations per step among the methods it also plots the fluctuation against
+force evaluations per simulated ps, and for every accuracy level given by stock Verlet's
+fluctuation at 1 to 4 fs prints which method and step give the most ns/day at that fluctuation or
+better (interpolated in log fluctuation between measured steps, never extrapolated) and the ratio
+to stock's ns/day.
 
-(times on 2 otherwise idle cores; the script prints its own estimate once it has timed a few steps
-of each box). Writes <output>.csv (one row per run), <output>_drift.png, <output>_fluctuation.png,
-<output>_work_precision.png and <output>.log (a copy of what is printed); --output defaults to
-benchmarks/results/energy_drift (quick mode: benchmarks/results/energy_drift_quick).
+Writes docs/results/<name>.md (name: that of --output, default energy_drift; a quick run:
+benchmarks/results/) with its figures <name>_drift.png, <name>_fluctuation.png and
+<name>_work_precision.png (docs/figures; a quick run: benchmarks/results/), and <output>.csv,
+<output>_equal_accuracy.csv and <output>.log. Measured results: docs/results/energy_drift.md.
 """
 
 import argparse
-import csv
 import dataclasses
 import datetime
 import math
 import os
-import platform as pyplatform
-import shlex
-import sys
 import textwrap
 import time
 from pathlib import Path
 from typing import Callable
 
-import matplotlib
 import numpy as np
 import openmm
-from openmm import app, unit
+from openmm import unit
 
 import openmmrigid
-from reporting import openLog, say, stamp
+from benchmarking import (RESULTS, Progress, ResultsDocument, cpuProperties, header, openLog, pyplot, say, saveFigure,
+                          slopeError, stamp, writeCsv)
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402 (after choosing the backend)
-import matplotlib.ticker  # noqa: E402
+plt = pyplot()
+import matplotlib.ticker  # noqa: E402 (after pyplot() chose the backend)
 
-ROOT = Path(__file__).resolve().parent.parent
-RESULTS = ROOT / "benchmarks" / "results"
 TEMPERATURE = 300.0  # K
 BOLTZMANN = (unit.BOLTZMANN_CONSTANT_kB*unit.AVOGADRO_CONSTANT_NA).value_in_unit(unit.kilojoule_per_mole/unit.kelvin)
 CUTOFF = 0.9  # nm
@@ -110,34 +80,6 @@ EQUILIBRATION_STEP = 2.0  # fs
 EQUILIBRATION_FRICTION = 5.0  # 1/ps: strong, so that short (quick) equilibrations reach 300 K after minimization
 DRIFT_BLOCKS = 10
 KJ = unit.kilojoule_per_mole
-
-
-class Progress:
-    """A progress bar on stderr (tqdm is not in the environment): one line redrawn on a terminal, a
-    new line every 30 s otherwise (a log file)."""
-
-    def __init__(self, total, label):
-        self.total, self.label, self.start = total, label, time.perf_counter()
-        self.live = sys.stderr.isatty()
-        self.shown = self.start
-
-    def update(self, done):
-        now = time.perf_counter()
-        if now - self.shown < (0.5 if self.live else 30.0) or done <= 0:
-            return
-        self.shown = now
-        fraction = done/self.total
-        elapsed = now - self.start
-        bar = "#"*int(30*fraction)
-        left = elapsed*(1 - fraction)/fraction
-        text = f"  {self.label} [{bar:<30}] {100*fraction:3.0f}% {elapsed:5.0f} s, ~{left:4.0f} s left"
-        sys.stderr.write(f"\r{text} " if self.live else text + "\n")
-        sys.stderr.flush()
-
-    def close(self):
-        if self.live:
-            sys.stderr.write("\r" + " "*100 + "\r")
-            sys.stderr.flush()
 
 
 # ---------------------------------------------------------------------------------------------------
@@ -246,28 +188,6 @@ def onStepVelocities(state, masses, stepFs):
     return velocities
 
 
-def fitDrift(times, energies):
-    """Slope (kJ/mol/ps) of the least-squares line and the standard deviation about it (kJ/mol)."""
-    slope, intercept = np.polyfit(times, energies, 1)
-    return slope, float(np.std(energies - (slope*times + intercept)))
-
-
-def blockDriftError(times, energies, blocks=DRIFT_BLOCKS):
-    """Standard error of the slope (kJ/mol/ps) through the means of `blocks` consecutive blocks.
-
-    Block means are nearly independent where a block outlasts the correlation time of the energy,
-    so this error, unlike that of the fit to every sample, does not understate the uncertainty.
-    """
-    n = len(times)//blocks*blocks
-    if n < 2*blocks:
-        return float("nan")
-    t = times[:n].reshape(blocks, -1).mean(axis=1)
-    e = energies[:n].reshape(blocks, -1).mean(axis=1)
-    slope, intercept = np.polyfit(t, e, 1)
-    residual = e - (slope*t + intercept)
-    return float(np.sqrt(residual @ residual/(blocks - 2)/np.sum((t - t.mean())**2)))
-
-
 # ---------------------------------------------------------------------------------------------------
 # Boxes
 
@@ -287,23 +207,17 @@ class Box:
 
 
 def buildBox(key, molecules, ewaldTolerance):
-    forceField = app.ForceField(MODELS[key].forceField)
-    modeller = app.Modeller(app.Topology(), [])
-    modeller.addSolvent(forceField, model=key, numAdded=molecules)
-    system = forceField.createSystem(modeller.topology, nonbondedMethod=app.PME, nonbondedCutoff=CUTOFF*unit.nanometer,
-                                     rigidWater=True, ewaldErrorTolerance=ewaldTolerance)
+    topology, positions, system = openmmrigid.testing.waterBox(
+        key, molecules=molecules, forceField=MODELS[key].forceField, nonbondedCutoff=CUTOFF*unit.nanometer,
+        ewaldErrorTolerance=ewaldTolerance)
     masses = np.array([system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles())])
     bodies = np.array([[atom.index for atom in residue.atoms() if masses[atom.index] > 0]
-                       for residue in modeller.topology.residues()])
+                       for residue in topology.residues()])
     removesMotion = any(isinstance(system.getForce(i), openmm.CMMotionRemover) for i in range(system.getNumForces()))
     count = len(bodies)
     dof = 3*int(np.count_nonzero(masses)) - system.getNumConstraints() - (3 if removesMotion else 0)
-    return Box(key, system, modeller.positions, count, bodies, masses, dof,
+    return Box(key, system, positions, count, bodies, masses, dof,
                3*count - (3 if removesMotion else 0), 3*count)
-
-
-def contextProperties(platform, threads):
-    return {"Threads": str(threads)} if platform.getName() == "CPU" and threads else {}
 
 
 def repeatableProperties(platform, properties):
@@ -337,14 +251,13 @@ def startEquilibration(box, platform, properties, seed):
 
 def finishEquilibration(box, context, integrator, picoseconds):
     steps = int(round(picoseconds*1000/EQUILIBRATION_STEP))
-    progress = Progress(steps, f"{MODELS[box.key].label} equilibration")
+    progress = Progress(f"{MODELS[box.key].label} equilibration", steps)
     done = 0
     while done < steps:
         block = min(100, steps - done)
         integrator.step(block)
         done += block
         progress.update(done)
-    progress.close()
     # The Langevin State's velocities belong half a step away from its positions and hold its 1e-5
     # constraint tolerance: not quite rigid motion. Every method starts from this state made rigid
     # at 1e-10, so that E(0) is the energy of what each integrates (RigidBodyIntegrator projects a
@@ -421,7 +334,7 @@ def runNVE(box, name, stepFs, args, platform, properties):
     threads = platform.getPropertyValue(context, "Threads") if platform.getName() == "CPU" else ""
     every, samples = sampling(stepFs, args)
     trace = Trace()
-    progress = Progress(samples, f"{MODELS[box.key].label} {name} {stepFs:g} fs")
+    progress = Progress(f"{MODELS[box.key].label} {name} {stepFs:g} fs", samples)
     for sample in range(samples + 1):
         time_ = sample*every*stepFs/1000
         try:
@@ -444,7 +357,6 @@ def runNVE(box, name, stepFs, args, platform, properties):
             trace.blowup, trace.reason = time_, f"|E - E0| > {args.threshold:g} kJ/mol per molecule"
             break
         progress.update(sample)
-    progress.close()
     del context
     return summarize(box, name, stepFs, every, args, trace, threads)
 
@@ -454,9 +366,8 @@ def summarize(box, name, stepFs, every, args, trace, threads):
     times, energies = np.array(trace.times), np.array(trace.energies)
     drift = fluctuation = driftError = nan
     if len(times) >= 3:
-        slope, fluctuation = fitDrift(times, energies)
-        drift = slope*1000/box.dof
-        driftError = blockDriftError(times, energies)*1000/box.dof
+        drift, fluctuation = openmmrigid.testing.energyDrift(times, energies, box.dof)
+        driftError = slopeError(times, energies, DRIFT_BLOCKS)*1000/box.dof
     msPerStep = 1000*trace.stepSeconds/trace.timedSteps if trace.timedSteps else nan
     nsPerDay = stepFs*1e-6/(msPerStep/1000)*86400
     samples = len(times)
@@ -524,15 +435,6 @@ def printTable(rows, args):
             say(line)
 
 
-def writeCsv(path, rows):
-    with open(path, "w", newline="") as stream:
-        writer = csv.DictWriter(stream, fieldnames=list(rows[0]))
-        writer.writeheader()
-        for row in rows:
-            writer.writerow({key: (f"{value:.6g}" if isinstance(value, float) else value) for key, value in row.items()})
-    say(f"wrote {path}")
-
-
 def seriesOf(rows, model, name):
     return sorted((r for r in rows if r["model"] == model and r["method"] == name), key=lambda r: r["step_fs"])
 
@@ -547,10 +449,7 @@ def panels(args, title):
 
 def finishFigure(figure, axes, path):
     axes[0].legend(fontsize=7, loc="best")
-    figure.tight_layout()
-    figure.savefig(path, dpi=130)
-    plt.close(figure)
-    say(f"wrote {path}")
+    saveFigure(figure, path)
 
 
 def plainLogTicks(axis):
@@ -694,7 +593,7 @@ def equalAccuracy(rows, args):
 def parseArguments():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--quick", action="store_true",
-                        help="TIP3P and TIP4P-Ew, 2/4/6 fs, 3 ps per run, 2 ps equilibration: a few minutes on 2 cores")
+                        help="a smoke check: TIP3P and TIP4P-Ew, 2/4/6 fs, 1.5 ps per run, 1 ps equilibration")
     parser.add_argument("--models", nargs="+", choices=list(MODELS) + ["all"],
                         help="water models, or all (default: tip3p spce tip4pew; quick: tip3p tip4pew). TIP5P is "
                              "left out by default because a TIP5P step costs 2.5 times a TIP3P step: with it the full "
@@ -704,9 +603,9 @@ def parseArguments():
                              f"splittings of RigidBodyIntegrator.setSplitting with stock; 'all': every one)")
     parser.add_argument("--steps", type=float, nargs="+", help="time steps in fs (default 1 to 8; quick: 2 4 6)")
     parser.add_argument("--molecules", type=int, default=500, help="waters per box (default 500)")
-    parser.add_argument("--time", type=float, help="simulated ps per NVE run (default 20; quick: 3)")
+    parser.add_argument("--time", type=float, help="simulated ps per NVE run (default 20; quick: 1.5)")
     parser.add_argument("--equilibrate", type=float,
-                        help="ps of Langevin equilibration per model, after minimization (default 5; quick: 2)")
+                        help="ps of Langevin equilibration per model, after minimization (default 5; quick: 1)")
     parser.add_argument("--sample-interval", type=float,
                         help="fs of simulated time between energy samples: the multiple of the step nearest to it "
                              "(default 48, exact but for 5 and 7 fs: 50, 49; quick: 24)")
@@ -731,8 +630,8 @@ def parseArguments():
     elif "schemes" in args.methods:
         args.methods = list(dict.fromkeys(SCHEMES + [m for m in args.methods if m != "schemes"]))
     args.steps = sorted(args.steps or ([2.0, 4.0, 6.0] if args.quick else [float(s) for s in range(1, 9)]))
-    args.time = args.time or (3.0 if args.quick else 20.0)
-    args.equilibrate = args.equilibrate if args.equilibrate is not None else (2.0 if args.quick else 5.0)
+    args.time = args.time or (1.5 if args.quick else 20.0)
+    args.equilibrate = args.equilibrate if args.equilibrate is not None else (1.0 if args.quick else 5.0)
     args.sample_interval = args.sample_interval or (24.0 if args.quick else 48.0)
     args.output = Path(args.output or RESULTS/("energy_drift_quick" if args.quick else "energy_drift"))
     if args.molecules < 1 or args.time <= 0 or args.sample_interval <= 0 or min(args.steps) <= 0:
@@ -755,13 +654,8 @@ def estimateSeconds(boxes, args):
 
 
 def printHeader(args, platform):
-    say(f"command:   {shlex.join([sys.executable] + sys.argv)}")
-    say(f"date:      {datetime.datetime.now().astimezone():%Y-%m-%d %H:%M:%S %Z}")
-    load = " ".join(f"{value:.2f}" for value in os.getloadavg())
-    say(f"machine:   {pyplatform.processor() or pyplatform.machine()}, os.cpu_count() = {os.cpu_count()}, "
-        f"load average {load} (1, 5, 15 min) before starting")
-    say(f"software:  OpenMM {openmm.version.full_version}, openmmrigid {openmmrigid.__version__}, platform "
-        f"{platform.getName()}{f', threads {args.threads}' if args.threads else ''}")
+    for line in header(platform.getName(), args.threads):
+        say(line)
     say(f"settings:  {'quick' if args.quick else 'full'}; models {' '.join(args.models)}; methods {' '.join(args.methods)}; "
         f"steps {' '.join(f'{s:g}' for s in args.steps)} fs; {args.molecules} waters; {args.time:g} ps per run; "
         f"equilibration {args.equilibrate:g} ps; samples every ~{args.sample_interval:g} fs; "
@@ -770,15 +664,8 @@ def printHeader(args, platform):
     say()
 
 
-def main():
-    args = parseArguments()
-    args.output.parent.mkdir(parents=True, exist_ok=True)
-    openLog(f"{args.output}.log")
-    platform = openmm.Platform.getPlatformByName(args.platform)
-    properties = contextProperties(platform, args.threads)
-    printHeader(args, platform)
-    started = time.perf_counter()
-
+def runAll(args, platform, properties, started):
+    """Build and equilibrate every box, then run every method at every step; returns the rows."""
     boxes, equilibrations = [], []
     for key in args.models:
         stamp(f"{MODELS[key].label}: building {args.molecules} waters, minimizing, timing a few steps")
@@ -790,7 +677,6 @@ def main():
     estimate = estimateSeconds(boxes, args)
     stamp(f"estimated total: {(time.perf_counter() - started + estimate)/60:.0f} min if every series stays stable "
           f"(less where one blows up); other work on these cores slows it")
-
     rows = []
     for index, box in enumerate(boxes):
         stamp(f"{MODELS[box.key].label}: {args.equilibrate:g} ps Langevin equilibration at {TEMPERATURE:g} K")
@@ -808,23 +694,51 @@ def main():
                 if row["blew_up"]:
                     break  # larger steps of this series are skipped
         box.state = None
+    return rows
 
-    printTable(rows, args)
-    say()
-    writeCsv(Path(f"{args.output}.csv"), rows)
+
+def plotAll(rows, args, platform, document):
+    """The figures of the run; returns (path, caption) of each."""
+    name = args.output.name
     title = (f"openmm-rigid NVE, {args.molecules} waters, PME, {args.time:g} ps per run, {platform.getName()}, "
              f"OpenMM {openmm.version.full_version}, {datetime.date.today()}{' (quick)' if args.quick else ''}")
+    figures = [(document.figurePath(f"{name}_drift.png"), "drift"),
+               (document.figurePath(f"{name}_fluctuation.png"), "fluctuation"),
+               (document.figurePath(f"{name}_work_precision.png"), "fluctuation against wall time per simulated ps")]
     plotAgainstStep(rows, args, "drift_kJ_mol_ns_dof", "drift_stderr_kJ_mol_ns_dof", "drift (kJ/mol/ns/dof)",
-                    Path(f"{args.output}_drift.png"), title, "symlog")
-    plotAgainstStep(rows, args, "fluctuation_kJ_mol", None, "energy fluctuation (kJ/mol)",
-                    Path(f"{args.output}_fluctuation.png"), title, "log")
-    plotWorkPrecision(rows, args, Path(f"{args.output}_work_precision.png"), title)
-    if any(METHODS[name].forceEvaluations > 1 for name in args.methods):
-        plotWorkPrecision(rows, args, Path(f"{args.output}_work_precision_forces.png"), title,
-                          "force_evaluations_per_ps", "force evaluations per simulated ps")
-    levels = equalAccuracy(rows, args)
+                    figures[0][0], title, "symlog")
+    plotAgainstStep(rows, args, "fluctuation_kJ_mol", None, "energy fluctuation (kJ/mol)", figures[1][0], title, "log")
+    plotWorkPrecision(rows, args, figures[2][0], title)
+    if any(METHODS[method].forceEvaluations > 1 for method in args.methods):
+        figures.append((document.figurePath(f"{name}_forces.png"), "fluctuation against force evaluations per ps"))
+        plotWorkPrecision(rows, args, figures[-1][0], title, "force_evaluations_per_ps",
+                          "force evaluations per simulated ps")
+    return figures
+
+
+def main():
+    args = parseArguments()
+    openLog(f"{args.output}.log")
+    platform = openmm.Platform.getPlatformByName(args.platform)
+    properties = cpuProperties(platform, args.threads)
+    printHeader(args, platform)
+    document = ResultsDocument(args.output.name, "Energy conservation against stock Verlet + SETTLE (NVE)",
+                               quick=args.quick, platform=platform.getName(), threads=args.threads,
+                               about="Method: the docstring of `benchmarks/energy_drift.py`.")
+    started = time.perf_counter()
+    rows = runAll(args, platform, properties, started)
+    with document.capture():
+        printTable(rows, args)
+    say()
+    writeCsv(Path(f"{args.output}.csv"), rows)
+    figures = plotAll(rows, args, platform, document)
+    with document.capture():
+        levels = equalAccuracy(rows, args)
     if levels:
         writeCsv(Path(f"{args.output}_equal_accuracy.csv"), levels)
+    for path, caption in figures:
+        document.figure(path, caption)
+    document.write()
     load = " ".join(f"{value:.2f}" for value in os.getloadavg())
     say(f"total {time.perf_counter() - started:.0f} s; load average now {load}")
 

@@ -4,7 +4,8 @@
 Configures the project in build/bench with -DOPENMMRIGID_BUILD_BENCHMARKS=ON and
 -DCMAKE_BUILD_TYPE=Release against the OpenMM headers of this interpreter's openmm wheel, builds
 FreeRotorCost, runs it pinned to one core (taskset -c 0 where available), prints the table with the
-performance goals beside it and writes benchmarks/results/free_rotor_cost.csv.
+performance goals beside it, and writes docs/results/free_rotor_cost.md and
+benchmarks/results/free_rotor_cost.csv. A run takes seconds once built (the build a few minutes).
 
 Goals (per body, one core): an asymmetric top costs at most 500 ns to construct and evolve once, at
 most 150 ns to evolve an existing rotor, and at most 300 ns in FreeRotor::advance (construct and
@@ -16,18 +17,15 @@ Usage: python benchmarks/free_rotor_cost.py [--no-build] [--core N]
 """
 
 import argparse
-import csv
 import importlib.util
 import os
-import platform
 import shutil
 import subprocess
 import sys
-from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
+from benchmarking import RESULTS, ROOT, ResultsDocument, machine, say, writeCsv
+
 BUILD = ROOT / "build" / "bench"
-RESULTS = ROOT / "benchmarks" / "results" / "free_rotor_cost.csv"
 
 # Goals in ns per call for the asymmetric top as FreeRotor's Automatic choice runs it (theta series at
 # generic m, elliptic integral near the separatrix). The row with the elliptic integral forced at
@@ -77,31 +75,29 @@ def main():
     output = subprocess.run(command, check=True, capture_output=True, text=True).stdout
 
     lines = [line.split(",")[1:] for line in output.splitlines() if line.startswith("CSV,")]
-    header, records = lines[0], [dict(zip(lines[0], values)) for values in lines[1:]]
+    records = [dict(zip(lines[0], values)) for values in lines[1:]]
     checksum = next((line for line in output.splitlines() if line.startswith("checksum")), "")
 
-    print(f"Free rotor cost on {platform.processor() or platform.machine()}, "
-          f"{'pinned to core ' + str(args.core) if pinned else 'unpinned'}; ns per call, "
-          f"median of {records[0]['repetitions']} repetitions x {records[0]['calls']} calls")
-    print()
-    print(f"{'kind':<28} {'mode':<17} {'representation':<18} {'median':>8} {'min':>8} {'max':>8}  goal")
-    for record in records:
-        goal = goalFor(record["kind"], record["mode"])
-        median = float(record["median_ns"])
-        verdict = "" if goal is None else f"<= {goal:.0f}  {'met' if median <= goal else 'MISSED'}"
-        record["goal_ns"] = "" if goal is None else f"{goal:.0f}"
-        record["meets_goal"] = "" if goal is None else str(median <= goal).lower()
-        print(f"{record['kind']:<28} {record['mode']:<17} {record['representation']:<18} "
-              f"{median:8.1f} {float(record['min_ns']):8.1f} {float(record['max_ns']):8.1f}  {verdict}")
-    print()
-    print(checksum)
-
-    RESULTS.parent.mkdir(parents=True, exist_ok=True)
-    with open(RESULTS, "w", newline="") as stream:
-        writer = csv.DictWriter(stream, fieldnames=header + ["goal_ns", "meets_goal"])
-        writer.writeheader()
-        writer.writerows(records)
-    print(f"wrote {RESULTS.relative_to(ROOT)}")
+    document = ResultsDocument("free_rotor_cost", "Cost of one free-rotor call (C++, one core)",
+                               about="Method: the docstrings of `benchmarks/free_rotor_cost.py` and "
+                                     "`benchmarks/FreeRotorCost.cpp`.")
+    with document.capture():
+        say(f"Free rotor cost on {machine()}, {'pinned to core ' + str(args.core) if pinned else 'unpinned'}; "
+            f"ns per call, median of {records[0]['repetitions']} repetitions x {records[0]['calls']} calls")
+        say()
+        say(f"{'kind':<28} {'mode':<17} {'representation':<18} {'median':>8} {'min':>8} {'max':>8}  goal")
+        for record in records:
+            goal = goalFor(record["kind"], record["mode"])
+            median = float(record["median_ns"])
+            verdict = "" if goal is None else f"<= {goal:.0f}  {'met' if median <= goal else 'MISSED'}"
+            record["goal_ns"] = "" if goal is None else f"{goal:.0f}"
+            record["meets_goal"] = "" if goal is None else str(median <= goal).lower()
+            say(f"{record['kind']:<28} {record['mode']:<17} {record['representation']:<18} "
+                f"{median:8.1f} {float(record['min_ns']):8.1f} {float(record['max_ns']):8.1f}  {verdict}")
+        say()
+        say(checksum)
+    writeCsv(RESULTS/"free_rotor_cost.csv", records)
+    document.write()
 
 
 if __name__ == "__main__":

@@ -101,6 +101,7 @@ reserve=0
 # shellcheck disable=SC2086 # STEP_COST_ARGS is a list of arguments
 phase step_cost 300 "$python" benchmarks/step_cost.py --platform CUDA --precision mixed ${STEP_COST_ARGS:---sizes 2000 20000 --models tip4pew --seconds 1} || true
 cp -r benchmarks/results "$logs/results" 2>/dev/null || true
+cp docs/results/step_cost_CUDA_mixed.md "$logs/" 2>/dev/null || true   # its results document
 
 cat "$summary"
 exit "$status"

@@ -28,20 +28,14 @@ exception, a non-finite energy, or |E - E0| above --threshold kJ/mol per degree 
     python benchmarks/hmr_schemes.py --stock-steps 4 6   # 10 ps per run: about 15 minutes on 2 busy cores
     python benchmarks/hmr_schemes.py --constraints AllBonds --stock-steps 4 6 --verlet-steps 4 6 \
         --omelyan-steps 4 6 8 --time 6 --equilibrate 5 --output benchmarks/results/hmr_schemes_allbonds
-    python benchmarks/hmr_schemes.py --time 2 --equilibrate 2   # a quick look
+    python benchmarks/hmr_schemes.py --quick   # a smoke check: 4 fs only, 0.24 ps per run
 
-(With --constraints AllBonds, Verlet at 8 fs has crashed the process with a segmentation fault; see the README.)
-
-Writes benchmarks/results/hmr_schemes.csv and hmr_schemes.log (a copy of what is printed).
+Writes docs/results/<name>.md (the name of --output, default hmr_schemes; a quick run:
+benchmarks/results/), and <output>.csv and <output>.log (a copy of what is printed).
 """
 
 import argparse
-import csv
-import datetime
 import os
-import platform as pyplatform
-import shlex
-import sys
 import time
 from pathlib import Path
 
@@ -50,10 +44,8 @@ import openmm
 from openmm import app, unit
 
 import openmmrigid
-from reporting import openLog, say, stamp
+from benchmarking import RESULTS, ResultsDocument, cpuProperties, header, openLog, say, stamp, writeCsv
 
-ROOT = Path(__file__).resolve().parent.parent
-RESULTS = ROOT / "benchmarks" / "results"
 SAMPLE_FS = 48  # a multiple of 4, 6 and 8 fs
 CONSTRAINT_TOLERANCE = 1e-10
 KJ = unit.kilojoule_per_mole
@@ -76,8 +68,14 @@ def parseArguments():
                         help="|E - E0| in kJ/mol per degree of freedom that counts as blown up (default 0.2)")
     parser.add_argument("--platform", default="CPU")
     parser.add_argument("--seed", type=int, default=35)
+    parser.add_argument("--threads", type=int, help="CPU platform threads (default: the platform's)")
+    parser.add_argument("--quick", action="store_true", help="a smoke check: every method at 4 fs only, 0.24 ps "
+                        "per run after 100 minimizer iterations and 0.2 ps of equilibration")
     parser.add_argument("--output", default=str(RESULTS / "hmr_schemes"))
     args = parser.parse_args()
+    args.minimizeIterations = 100 if args.quick else 500
+    if args.quick:
+        args.steps, args.stock_steps, args.time, args.equilibrate = [4], [4], 0.24, 0.2
     args.verlet_steps = args.verlet_steps or args.steps
     args.omelyan_steps = args.omelyan_steps or args.steps
     for step in args.verlet_steps + args.omelyan_steps + args.stock_steps:
@@ -95,33 +93,27 @@ def buildSystem(args):
     return pdb, system
 
 
-def degreesOfFreedom(system):
-    massive = sum(1 for i in range(system.getNumParticles()) if system.getParticleMass(i) > 0*unit.dalton)
-    remover = any(isinstance(force, openmm.CMMotionRemover) for force in system.getForces())
-    return 3*massive - system.getNumConstraints() - (3 if remover else 0)
-
-
-def equilibrate(pdb, system, platform, args):
+def equilibrate(pdb, system, platform, properties, args):
     integrator = openmm.LangevinMiddleIntegrator(300*unit.kelvin, 1/unit.picosecond, 4*unit.femtosecond)
     integrator.setRandomNumberSeed(args.seed)
-    context = openmm.Context(system, integrator, platform)
+    context = openmm.Context(system, integrator, platform, properties)
     context.setPositions(pdb.positions)
-    openmm.LocalEnergyMinimizer.minimize(context, 10, 500)
+    openmm.LocalEnergyMinimizer.minimize(context, 10, args.minimizeIterations)
     context.setVelocitiesToTemperature(300*unit.kelvin, args.seed)
     steps = int(round(args.equilibrate*250))
     for done in range(0, steps, 250):
         integrator.step(min(250, steps - done))
-        stamp(f"  equilibration {min(done + 250, steps)*0.004:.0f} / {args.equilibrate:g} ps")
+        stamp(f"  equilibration {min(done + 250, steps)*0.004:.1f} / {args.equilibrate:g} ps")
     return context.getState(getPositions=True, getVelocities=True)
 
 
 class Run:
     """One method at one step: its Context, and the energies and wall time so far."""
 
-    def __init__(self, label, scheme, stepFs, integrator, system, state, platform):
+    def __init__(self, label, scheme, stepFs, integrator, system, state, platform, properties):
         self.label, self.scheme, self.stepFs, self.integrator = label, scheme, stepFs, integrator
         integrator.setConstraintTolerance(CONSTRAINT_TOLERANCE)
-        self.context = openmm.Context(system, integrator, platform)
+        self.context = openmm.Context(system, integrator, platform, properties)
         self.context.setState(state)
         if isinstance(integrator, openmm.VerletIntegrator):
             self.context.applyConstraints(CONSTRAINT_TOLERANCE)
@@ -156,15 +148,15 @@ class Run:
         return not self.failure
 
 
-def makeRuns(system, state, platform, args):
+def makeRuns(system, state, platform, properties, args):
     runs = [Run(f"stock VerletIntegrator {stepFs:g} fs", "stock", stepFs, openmm.VerletIntegrator(stepFs*unit.femtosecond),
-                system, state, platform) for stepFs in args.stock_steps]
+                system, state, platform, properties) for stepFs in args.stock_steps]
     for scheme, steps in (("Verlet", args.verlet_steps), ("Omelyan2", args.omelyan_steps)):
         for stepFs in steps:
             integrator = openmmrigid.RigidBodyIntegrator(stepFs*unit.femtosecond)
             integrator.setSplitting(getattr(openmmrigid.RigidBodyIntegrator, scheme))
             runs.append(Run(f"RigidBodyIntegrator {scheme} {stepFs:g} fs", scheme, stepFs, integrator, system, state,
-                            platform))
+                            platform, properties))
     return runs
 
 
@@ -173,9 +165,8 @@ def summarize(run, dof, stockFluctuation):
     row = {"method": run.label, "scheme": run.scheme, "step_fs": run.stepFs, "simulated_ps": times[-1] - times[0],
            "failure": run.failure}
     if len(times) >= 3:
-        slope, intercept = np.polyfit(times, energies, 1)
-        fluctuation = float(np.std(energies - (slope*times + intercept)))
-        row.update(drift_kj_per_mol_ns_dof=slope*1000/dof, fluctuation_kj_per_mol=fluctuation)
+        drift, fluctuation = openmmrigid.testing.energyDrift(times, energies, dof)
+        row.update(drift_kj_per_mol_ns_dof=drift, fluctuation_kj_per_mol=fluctuation)
         if stockFluctuation:
             row["fluctuation_to_stock"] = fluctuation/stockFluctuation
     if run.seconds > 0:
@@ -210,22 +201,25 @@ def printTable(rows):
 
 def main():
     args = parseArguments()
-    RESULTS.mkdir(parents=True, exist_ok=True)
     openLog(Path(args.output + ".log"))
     platform = openmm.Platform.getPlatformByName(args.platform)
-    say(f"command:   {shlex.join([sys.executable] + sys.argv)}")
-    say(f"date:      {datetime.datetime.now().astimezone():%Y-%m-%d %H:%M:%S %Z}; machine {pyplatform.machine()}, "
-        f"{os.cpu_count()} CPUs, load {' '.join(Path('/proc/loadavg').read_text().split()[:3])}")
-    say(f"software:  OpenMM {openmm.version.full_version}, openmmrigid {openmmrigid.__version__}, platform {args.platform}")
+    properties = cpuProperties(platform, args.threads)
+    document = ResultsDocument(Path(args.output).name, "A solvated protein with hydrogen mass repartitioning: "
+                               "which step and splitting", quick=args.quick, platform=args.platform, threads=args.threads,
+                               about="Method: the docstring of `benchmarks/hmr_schemes.py`.")
+    for line in header(args.platform, args.threads):
+        say(line)
     started = time.perf_counter()
     pdb, system = buildSystem(args)
-    dof = degreesOfFreedom(system)
+    dof = openmmrigid.testing.degreesOfFreedom(system)
     waters = sum(1 for residue in pdb.topology.residues() if residue.name == "HOH")
-    say(f"system:    {os.path.basename(args.pdb)}: {system.getNumParticles()} atoms, {waters} waters, "
-        f"hydrogen mass {args.hydrogen_mass:g} amu, constraints={args.constraints} ({system.getNumConstraints()} constraints), {dof} degrees of freedom")
+    with document.capture():
+        say(f"system: {os.path.basename(args.pdb)}: {system.getNumParticles()} atoms, {waters} waters, hydrogen mass "
+            f"{args.hydrogen_mass:g} amu, constraints={args.constraints} ({system.getNumConstraints()} constraints), "
+            f"{dof} degrees of freedom; {args.equilibrate:g} ps of equilibration, {args.time:g} ps NVE per run")
     stamp(f"minimizing, then {args.equilibrate:g} ps of LangevinMiddleIntegrator at 4 fs")
-    state = equilibrate(pdb, system, platform, args)
-    runs = makeRuns(system, state, platform, args)
+    state = equilibrate(pdb, system, platform, properties, args)
+    runs = makeRuns(system, state, platform, properties, args)
     rigid = runs[len(args.stock_steps)].integrator
     stamp(f"{len(runs)} runs of {args.time:g} ps, round-robin in {SAMPLE_FS} fs pieces; RigidBodyIntegrator: "
           f"{rigid.getNumBodies()} bodies, {rigid.getNumDegreesOfFreedom()} degrees of freedom")
@@ -239,13 +233,12 @@ def main():
             break
     stockRow = summarize(runs[0], dof, None)
     rows = [summarize(run, dof, stockRow.get("fluctuation_kj_per_mol")) for run in runs]
-    printTable(rows)
-    with open(args.output + ".csv", "w", newline="") as stream:
-        fields = list(dict.fromkeys(key for row in rows for key in row))
-        writer = csv.DictWriter(stream, fieldnames=fields)
-        writer.writeheader()
-        writer.writerows(rows)
-    say(f"wrote {args.output}.csv; total {time.perf_counter() - started:.0f} s")
+    with document.capture():
+        printTable(rows)
+    fields = list(dict.fromkeys(key for row in rows for key in row))
+    writeCsv(args.output + ".csv", [{key: row.get(key, "") for key in fields} for row in rows])
+    document.write()
+    say(f"total {time.perf_counter() - started:.0f} s")
 
 
 if __name__ == "__main__":

@@ -28,18 +28,15 @@ body's total force (relative to the largest per-atom force).
 
     python benchmarks/intrabody_cost.py                  # both systems: about 4 minutes on 2 busy cores
     python benchmarks/intrabody_cost.py --systems dipeptides --nonbonded CutoffPeriodic
+    python benchmarks/intrabody_cost.py --quick          # a smoke check: 27 dipeptides, 3 short rounds
 
-Writes benchmarks/results/intrabody_cost.csv and intrabody_cost.log (a copy of what is printed; --output
-changes the path).
+Writes docs/results/<name>.md (the name of --output, default intrabody_cost; a quick run:
+benchmarks/results/), and <output>.csv and <output>.log (a copy of what is printed).
 """
 
 import argparse
-import csv
-import datetime
 import os
-import shlex
 import statistics
-import sys
 import time
 from pathlib import Path
 
@@ -48,22 +45,13 @@ import openmm
 from openmm import app, unit
 
 import openmmrigid
-from reporting import openLog, say, stamp
+from benchmarking import RESULTS, ResultsDocument, header, openLog, say, stamp, writeCsv
 
-ROOT = Path(__file__).resolve().parent.parent
-RESULTS = ROOT / "benchmarks" / "results"
 KJ = unit.kilojoule_per_mole
 RINGS = {"PHE": "CG|CD[12]|CE[12]|CZ|HD[12]|HE[12]|HZ",
          "TYR": "CG|CD[12]|CE[12]|CZ|OH|HD[12]|HE[12]",
          "TRP": "CG|CD[12]|NE1|CE[23]|CZ[23]|CH2|HD1|HE[13]|HZ[23]|HH2",
          "HIS": "CG|ND1|CD2|CE1|NE2|HD[12]|HE[12]"}  # openmm.app.PDBFile reads HIE, HID and HIP as HIS
-
-
-def randomRotation(rng):
-    w, x, y, z = (lambda q: q/np.linalg.norm(q))(rng.normal(size=4))
-    return np.array([[1 - 2*(y*y + z*z), 2*(x*y - w*z), 2*(x*z + w*y)],
-                     [2*(x*y + w*z), 1 - 2*(x*x + z*z), 2*(y*z - w*x)],
-                     [2*(x*z - w*y), 2*(y*z + w*x), 1 - 2*(x*x + y*y)]])
 
 
 def dipeptideBox(args):
@@ -77,7 +65,7 @@ def dipeptideBox(args):
     modeller = app.Modeller(app.Topology(), [])
     for index in range(args.molecules):
         site = spacing*(np.array(np.unravel_index(index, (perSide,)*3)) + 0.5)
-        modeller.add(pdb.topology, (local @ randomRotation(rng).T + site)*unit.nanometer)
+        modeller.add(pdb.topology, (local @ openmmrigid.testing.randomRotation(rng).T + site)*unit.nanometer)
     edge = spacing*perSide
     modeller.topology.setPeriodicBoxVectors(np.eye(3)*edge*unit.nanometer)
     forceField = app.ForceField("amber14-all.xml")
@@ -194,40 +182,56 @@ def measure(name, args, platform):
     return row
 
 
-def main():
+def parseArguments():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--systems", nargs="+", choices=sorted(SYSTEMS), default=["dipeptides", "villin"])
-    parser.add_argument("--molecules", type=int, default=216, help="dipeptides in the box (default 216)")
+    parser.add_argument("--systems", nargs="+", choices=sorted(SYSTEMS), help="default: dipeptides villin "
+                        "(quick: dipeptides)")
+    parser.add_argument("--molecules", type=int, help="dipeptides in the box (default 216; quick 27)")
     parser.add_argument("--density", type=float, default=0.6, help="g/mL of the dipeptide box (default 0.6)")
     parser.add_argument("--nonbonded", choices=["PME", "CutoffPeriodic"], default="PME",
                         help="the dipeptide box's nonbonded method (default PME)")
-    parser.add_argument("--repetitions", type=int, default=7, help="timed blocks per System (default 7)")
-    parser.add_argument("--seconds", type=float, default=2.0, help="target seconds per block (default 2)")
+    parser.add_argument("--repetitions", type=int, help="timed blocks per System (default 7; quick 3)")
+    parser.add_argument("--seconds", type=float, help="target seconds per block (default 2; quick 0.2)")
     parser.add_argument("--threads", default=None, help="CPU platform Threads (default: the platform's)")
+    parser.add_argument("--quick", action="store_true", help="a smoke check: 27 dipeptides, 3 rounds of 0.2 s")
     parser.add_argument("--output", default=str(RESULTS / "intrabody_cost"), help="path of the .csv and .log, less the suffix")
     args = parser.parse_args()
-    RESULTS.mkdir(parents=True, exist_ok=True)
-    openLog(Path(args.output + ".log"))
-    platform = openmm.Platform.getPlatformByName("CPU")
-    if args.threads:
-        platform.setPropertyDefaultValue("Threads", args.threads)
-    say(f"command:   {shlex.join([sys.executable] + sys.argv)}")
-    say(f"date:      {datetime.datetime.now().astimezone():%Y-%m-%d %H:%M:%S %Z}; {os.cpu_count()} CPUs, load "
-        f"{' '.join(Path('/proc/loadavg').read_text().split()[:3])}; OpenMM {openmm.version.full_version}, CPU platform, "
-        f"Threads {platform.getPropertyDefaultValue('Threads')}")
-    rows = [measure(name, args, platform) for name in args.systems]
-    say(f"\n{'':<12}{'wall time':>40}{'CPU time of this process':>40}")
+    defaults = dict(systems=(["dipeptides"], ["dipeptides", "villin"]), molecules=(27, 216), repetitions=(3, 7),
+                    seconds=(0.2, 2.0))
+    for key, (quick, full) in defaults.items():
+        if getattr(args, key) is None:
+            setattr(args, key, quick if args.quick else full)
+    return args
+
+
+def tabulate(rows, args):
+    say(f"{'':<12}{'wall time':>40}{'CPU time of this process':>40}")
     say(f"{'system':<12}" + f"{'full ms/step':>14}{'lean ms/step':>14}{'lean / full':>12}"*2)
     for row in rows:
         say(f"{row['system']:<12}{row['full_ms_per_step']:>14.2f}{row['lean_ms_per_step']:>14.2f}{row['lean_to_full']:>12.3f}"
             f"{row['full_cpu_ms_per_step']:>14.2f}{row['lean_cpu_ms_per_step']:>14.2f}{row['cpu_lean_to_full']:>12.3f}")
     say(f"(medians of {args.repetitions} interleaved rounds; lean / full is the median of the per-round ratios. On a\n"
         "shared machine the CPU time, which other processes do not inflate, is the steadier measure.)")
-    with open(args.output + ".csv", "w", newline="") as stream:
-        writer = csv.DictWriter(stream, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
-    say(f"wrote {args.output}.csv")
+
+
+def main():
+    args = parseArguments()
+    openLog(Path(args.output + ".log"))
+    platform = openmm.Platform.getPlatformByName("CPU")
+    if args.threads:
+        platform.setPropertyDefaultValue("Threads", args.threads)
+    threads = platform.getPropertyDefaultValue("Threads")
+    document = ResultsDocument(Path(args.output).name, "What removeIntraBodyInteractions saves per step",
+                               quick=args.quick, platform="CPU", threads=threads,
+                               about="Method: the docstring of `benchmarks/intrabody_cost.py`.")
+    for line in header("CPU", threads):
+        say(line)
+    with document.capture():
+        rows = [measure(name, args, platform) for name in args.systems]
+        say()
+        tabulate(rows, args)
+    writeCsv(args.output + ".csv", rows)
+    document.write()
 
 
 if __name__ == "__main__":

@@ -8,7 +8,7 @@ every 25 steps):
 
 - tip3p-nvt, tip3p-npt: 500 rigid TIP3P waters;
 - tip4pew-nvt, tip4pew-npt: 500 rigid TIP4P-Ew waters;
-- protein: alanine dipeptide (amber14-all, the PDB of tests/python/systems.py) in 500 rigid TIP3P
+- protein: alanine dipeptide (amber14-all, openmmrigid.testing.alanineDipeptide()) in 500 rigid TIP3P
   waters, NPT, constraints=HBonds, hydrogenMass=3 amu. RigidBodyLangevinIntegrator moves the waters
   as rigid bodies and the peptide as free atoms with its bonds to hydrogen constrained.
 
@@ -57,26 +57,20 @@ docs/figures/nvt_accuracy_<system>.png, a quick one writes them under benchmarks
 
 import argparse
 import datetime
-import io
 import json
 import os
-import platform as pyplatform
-import subprocess
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 import openmm
 from openmm import app, unit
 
 import openmmrigid
-from reporting import openLog, say, stamp
+from benchmarking import (RESULTS as BENCHMARK_RESULTS, ROOT, Progress, ResultsDocument, blockMean, commit, command,
+                          machine, nsPerDay, openLog, pyplot, radialDistribution, say, stamp)
 
-ROOT = Path(__file__).resolve().parent.parent
-RESULTS = ROOT/"benchmarks"/"results"/"nvt_accuracy"
-sys.path.insert(0, str(ROOT/"tests"/"python"))
-from systems import ALANINE_DIPEPTIDE  # noqa: E402 (the peptide the tests use)
+RESULTS = BENCHMARK_RESULTS/"nvt_accuracy"
 
 TEMPERATURE = 300*unit.kelvin
 FRICTION = 1/unit.picosecond
@@ -112,18 +106,12 @@ INTEGRATORS = {"stock": "LangevinMiddleIntegrator + SETTLE", "exact": "RigidBody
 
 def buildModel(model, protein):
     """Topology, positions and the NPT System of one model (the barostat is the last force)."""
-    forceField = app.ForceField("amber14-all.xml", f"amber14/{model}.xml")
-    if protein:
-        peptide = app.PDBFile(io.StringIO(ALANINE_DIPEPTIDE))
-        modeller = app.Modeller(peptide.topology, peptide.positions)
-    else:
-        modeller = app.Modeller(app.Topology(), [])
-    modeller.addSolvent(forceField, model=model, numAdded=MOLECULES)
     options = dict(constraints=app.HBonds, hydrogenMass=3*unit.amu) if protein else dict(constraints=None)
-    system = forceField.createSystem(modeller.topology, nonbondedMethod=app.PME, nonbondedCutoff=0.9*unit.nanometer,
-                                     rigidWater=True, ewaldErrorTolerance=5e-4, **options)
+    topology, positions, system = openmmrigid.testing.waterBox(
+        model, molecules=MOLECULES, forceField=["amber14-all.xml", f"amber14/{model}.xml"],
+        solute=openmmrigid.testing.alanineDipeptide() if protein else None, **options)
     system.addForce(openmm.MonteCarloBarostat(PRESSURE, TEMPERATURE, BAROSTAT_INTERVAL))
-    return modeller.topology, modeller.positions, system
+    return topology, positions, system
 
 
 def withoutBarostat(system):
@@ -193,26 +181,6 @@ def makeContext(system, state, kind, stepFs, seed, platform, properties, npt):
     return context, integrator
 
 
-class Progress:
-    """A text progress line: rewritten in place on a terminal, a line every 20 % otherwise."""
-
-    def __init__(self, label, total):
-        self.label, self.total, self.started, self.shown = label, total, time.perf_counter(), -1
-        self.terminal = sys.stdout.isatty()
-
-    def update(self, done):
-        fraction = done/self.total
-        elapsed = time.perf_counter() - self.started
-        left = elapsed*(1 - fraction)/fraction if fraction > 0 else float("nan")
-        bar = "#"*int(20*fraction) + "-"*(20 - int(20*fraction))
-        text = f"  {self.label} [{bar}] {100*fraction:3.0f} %, {elapsed:.0f} s, about {left:.0f} s left"
-        if self.terminal:
-            print("\r" + text, end="\n" if done >= self.total else "", flush=True)
-        elif int(5*fraction) > self.shown:
-            self.shown = int(5*fraction)
-            say(text)
-
-
 def simulate(system, state, analysis, kind, stepFs, seed, npt, discard, production, platform, properties):
     """One run. Returns the samples (dict of lists), the oxygen frames and box edges, ms per step, and
     a failure message (empty if it finished)."""
@@ -278,48 +246,15 @@ def timeIntegrators(system, state, configurations, npt, platform, properties, st
     return {key: float(np.median(values)) for key, values in times.items()}
 
 
-def nsPerDay(stepFs, secondsPerStep):
-    return stepFs*1e-6*86400/secondsPerStep
-
-
 # ---------------------------------------------------------------------------------------------------
 # Analysis
 # ---------------------------------------------------------------------------------------------------
 
 
-def blockMean(values):
-    """Mean and standard error: the larger of the 5- and 10-block estimates."""
-    values = np.asarray(values, dtype=float)
-    errors = []
-    for blocks in (5, 10):
-        n = len(values)//blocks*blocks
-        if n < blocks:
-            continue
-        means = values[:n].reshape(blocks, -1, *values.shape[1:]).mean(axis=1)
-        errors.append(means.std(axis=0, ddof=1)/np.sqrt(blocks))
-    error = np.max(errors, axis=0) if errors else np.full(values.shape[1:], np.nan)
-    return values.mean(axis=0), error
-
-
-def radialDistribution(frames, edges):
-    """g_OO(r) of each frame (minimum image, cubic box)."""
-    bins = np.arange(0.0, RDF_MAX + RDF_BIN/2, RDF_BIN)
-    shells = 4/3*np.pi*(bins[1:]**3 - bins[:-1]**3)
-    upper = np.triu_indices(frames.shape[1], k=1)
-    result = []
-    for positions, box in zip(frames, edges):
-        delta = positions[:, None, :] - positions[None, :, :]
-        delta -= box*np.round(delta/box)
-        counts, _ = np.histogram(np.sqrt(np.sum(delta**2, axis=-1))[upper], bins=bins)
-        n = len(positions)
-        result.append(2*counts/(n*(n/np.prod(box))*shells))
-    return 0.5*(bins[1:] + bins[:-1]), np.array(result)
-
-
 def summarize(data, frames, edges):
     """Means and errors of one run; g(r) as its mean and error per bin."""
     summary = {key: blockMean(values) for key, values in data.items()}
-    radii, g = radialDistribution(frames, edges)
+    radii, g = radialDistribution(frames, edges, RDF_MAX, RDF_BIN)
     gMean, gError = blockMean(g)
     return {key: [float(v[0]), float(v[1])] for key, v in summary.items()}, radii, gMean, gError
 
@@ -495,12 +430,8 @@ def fmt(value, error, digits):
 
 
 def reportMarkdown(results, meta, figures):
-    lines = [f"# NVT/NPT accuracy against step size: RigidBodyLangevinIntegrator and LangevinMiddleIntegrator + SETTLE", "",
-             "Generated by `benchmarks/nvt_accuracy.py` (see its docstring for the method). "
-             f"{meta['date']}, commit `{meta['commit']}`, {meta['machine']}, OpenMM {openmm.__version__}, "
-             f"platform {meta['platform']} ({meta['threads']} thread(s) per process).", "",
-             "Commands:", "", "```"] + meta["commands"] + ["```", "",
-             f"Each run: {meta['discard']:g} ps discarded, {meta['time']:g} ps sampled every {SAMPLE_EVERY} ps, "
+    """The body of the report (after ResultsDocument's header): Markdown lines."""
+    lines = [f"Each run: {meta['discard']:g} ps discarded, {meta['time']:g} ps sampled every {SAMPLE_EVERY} ps, "
              "from one equilibrated state per model; 300 K, friction 1/ps; errors are standard errors of the "
              "mean (larger of 5- and 10-block estimates). Reference: the 1 fs runs of LangevinMiddle and of "
              "RigidBodyLangevin (Exact), pooled. \"Agrees\": |U/molecule - ref| (and, NPT, |density - ref|) "
@@ -618,13 +549,11 @@ def reportMarkdown(results, meta, figures):
                                      "ref" if run["step"] == 1 else str(agrees(c, result["npt"])).lower(),
                                      f"{run['ms']:.3f}", ""]))
     lines += ["```", ""]
-    return "\n".join(lines)
+    return lines
 
 
 def plot(result, path):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
     panels = [("potential", "U/molecule - ref (kJ/mol)"), ("density", "density - ref (g/mL)"),
               ("temperature", "T reported (K)"), ("peak", "g_OO first peak - ref")]
     if not result["npt"]:
@@ -734,15 +663,21 @@ def writeReport(mode, meta):
     meta["timing"] = ", ".join(sorted({m.get("timing", "") for m in metas} - {""})) or "5 x 200 steps at the end of each system's runs"
     meta["date"] = ", ".join(sorted({m["date"] for m in metas}))
     figureFolder = ROOT/"docs"/"figures" if mode == "full" else folder
-    document = ROOT/"docs"/"results"/"nvt_accuracy.md" if mode == "full" else folder/"nvt_accuracy.md"
+    document = ResultsDocument("nvt_accuracy", "NVT/NPT accuracy against step size: RigidBodyLangevinIntegrator and "
+                               "LangevinMiddleIntegrator + SETTLE", quick=mode == "quick", provenance=[
+                                   f"date: {meta['date']}", f"commit: {meta['commit']}", f"machine: {meta['machine']}",
+                                   f"software: OpenMM {openmm.__version__}",
+                                   f"platform: {meta['platform']} ({meta['threads']} thread(s) per process)",
+                                   "commands:"], about="```\n" + "\n".join(meta["commands"]) + "\n```")
+    if mode == "quick":
+        document.path = folder/"nvt_accuracy.md"
     figures = {}
     for result in results:
         path = figureFolder/f"nvt_accuracy_{result['name']}.png"
         plot(result, path)
-        figures[result["name"]] = os.path.relpath(path, document.parent)
-    document.parent.mkdir(parents=True, exist_ok=True)
-    document.write_text(reportMarkdown(results, meta, figures))
-    say(f"wrote {document} and {len(figures)} figures in {figureFolder}")
+        figures[result["name"]] = os.path.relpath(path, document.path.parent)
+    document.lines += reportMarkdown(results, meta, figures)
+    document.write()
 
 
 # ---------------------------------------------------------------------------------------------------
@@ -773,10 +708,7 @@ def main():
     systems = args.systems or (["tip3p-npt", "protein"] if args.quick else list(SYSTEMS))
     folder = RESULTS/mode
     folder.mkdir(parents=True, exist_ok=True)
-    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True, text=True).stdout.strip()
-    command = "python benchmarks/nvt_accuracy.py " + " ".join(sys.argv[1:])
-    meta = dict(date=f"{datetime.datetime.now():%Y-%m-%d}", commit=commit or "unknown", command=command.strip(),
-                machine=f"{pyplatform.processor() or pyplatform.machine()}, {os.cpu_count()} cores",
+    meta = dict(date=f"{datetime.datetime.now():%Y-%m-%d}", commit=commit(), command=command(), machine=machine(),
                 platform=args.platform, threads=args.threads if args.platform == "CPU" else "-",
                 time=args.time, discard=args.discard)
     if args.report:
@@ -787,7 +719,7 @@ def main():
         writeReport(mode, meta)
         return
     openLog(folder/f"nvt_accuracy_{'_'.join(systems)}.log")
-    say(f"{command}: {datetime.datetime.now():%Y-%m-%d %H:%M}, commit {commit}, {meta['machine']}, OpenMM "
+    say(f"{meta['command']}: {datetime.datetime.now():%Y-%m-%d %H:%M}, commit {meta['commit']}, {meta['machine']}, OpenMM "
         f"{openmm.__version__}, platform {args.platform} ({meta['threads']} threads); {args.discard:g} ps discarded and "
         f"{args.time:g} ps sampled per run")
     platform = openmm.Platform.getPlatformByName(args.platform)

@@ -32,23 +32,20 @@ RigidBodyIntegrator with setRotationMethod(NoSquish) for T at dt = 2 fs must mat
 NO_SQUISH to rounding, and with Exact must match FreeRotor to rounding.
 
 Part 3, the cost. RigidBodyIntegrator Exact against NoSquish on N (8000) such bodies with no forces,
-CPU platform, one thread, interleaved blocks, medians (the timing helpers of benchmarks/step_cost.py,
+CPU platform, one thread, interleaved blocks, medians (the timing helpers of benchmarks/benchmarking.py,
 with the process's CPU time recorded next to the wall time): ns per body per step, and the accuracy
 each buys at a typical step.
 
     python benchmarks/rotation_accuracy.py            # default: a few minutes
     python benchmarks/rotation_accuracy.py --quick    # fewer bodies and steps: under a minute
 
-Writes benchmarks/results/rotation_accuracy.png and rotation_accuracy.csv.
+Writes docs/results/rotation_accuracy.md and docs/figures/rotation_accuracy.png (a quick run: both in
+benchmarks/results/), and benchmarks/results/rotation_accuracy.csv.
 """
 
 import argparse
-import csv
 import datetime
-import os
-import sys
 import time
-from pathlib import Path
 
 import numpy as np
 import openmm
@@ -56,11 +53,11 @@ from openmm import unit
 
 import openmmrigid
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-import step_cost  # noqa: E402 (the timing helpers; importing it also selects matplotlib's Agg backend)
-import matplotlib.pyplot as plt  # noqa: E402
+from benchmarking import (RESULTS, ResultsDocument, blockSteps, cpuProperties, header, medianRange, pyplot, say,
+                          saveFigure, timeInterleaved, writeCsv)
 
-RESULTS = step_cost.RESULTS
+plt = pyplot()
+STEP = 2*unit.femtosecond
 BOLTZMANN = 0.00831446261815324  # kJ/mol/K
 TEMPERATURE = 300.0              # K
 PARTICLE_MASS = 4.0              # amu, each of the six masses of a benchmark body
@@ -79,7 +76,7 @@ def randomBodies(count, seed):
     for row in moments:
         first, second = rng.uniform(0.005, 0.02, size=2)
         row[:] = sorted([first, second, rng.uniform(max(first, second), first + second)])
-    attitudes = np.array([step_cost.randomRotation(rng) for _ in range(count)])
+    attitudes = np.array([openmmrigid.testing.randomRotation(rng) for _ in range(count)])
     omegas = rng.normal(size=(count, 3))*np.sqrt(BOLTZMANN*TEMPERATURE/moments)
     return moments, attitudes, omegas
 
@@ -191,15 +188,15 @@ def order(rows, scheme, key):
 
 
 def printAccuracy(rows, total, count):
-    print(f"\nPart 1: error after T = {total:g} ps of free rotation against FreeRotor; {count} random asymmetric bodies")
-    print(f"{'scheme':<13}{'dt (fs)':>9}{'steps':>8}{'attitude median':>17}{'90th pct':>11}"
+    say(f"\nPart 1: error after T = {total:g} ps of free rotation against FreeRotor; {count} random asymmetric bodies")
+    say(f"{'scheme':<13}{'dt (fs)':>9}{'steps':>8}{'attitude median':>17}{'90th pct':>11}"
           f"{'omega median':>15}{'90th pct':>11}")
     for row in rows:
-        print(f"{row['scheme']:<13}{row['dt_fs']:>9.4g}{row['steps']:>8}{row['attitude_median_rad']:>17.3e}"
+        say(f"{row['scheme']:<13}{row['dt_fs']:>9.4g}{row['steps']:>8}{row['attitude_median_rad']:>17.3e}"
               f"{row['attitude_p90_rad']:>11.3e}{row['omega_median_rel']:>15.3e}{row['omega_p90_rel']:>11.3e}")
-    print("attitude: rotation angle of A A_exact^T (rad); omega: |omega - omega_exact|/|omega_exact| (body frame)")
+    say("attitude: rotation angle of A A_exact^T (rad); omega: |omega - omega_exact|/|omega_exact| (body frame)")
     for scheme in SCHEMES:
-        print(f"order of {scheme}: {order(rows, scheme, 'attitude_median_rad'):.3f} (attitude), "
+        say(f"order of {scheme}: {order(rows, scheme, 'attitude_median_rad'):.3f} (attitude), "
               f"{order(rows, scheme, 'omega_median_rel'):.3f} (omega); fit where the median attitude error is below 0.05 rad")
 
 
@@ -254,16 +251,16 @@ def compareWithIntegrator(moments, attitudes, omegas, total, dtFs):
 
 
 def printComparison(steps, results, total, dtFs, count):
-    print(f"\nPart 2: RigidBodyIntegrator (C++, Reference platform, no forces), {count} bodies of six masses, "
+    say(f"\nPart 2: RigidBodyIntegrator (C++, Reference platform, no forces), {count} bodies of six masses, "
           f"{steps} steps of {dtFs:g} fs (T = {total:g} ps)")
-    print(f"{'integrator method':<20}{'compared with':<26}{'positions: max':>16}{'median':>10}"
+    say(f"{'integrator method':<20}{'compared with':<26}{'positions: max':>16}{'median':>10}"
           f"{'velocities: max':>17}{'median':>10}")
     names = {openmmrigid.RigidBodyIntegrator.NoSquish: ("NoSquish", "numpy NO_SQUISH (here)"),
              openmmrigid.RigidBodyIntegrator.Exact: ("Exact", "FreeRotor.evolve(T)")}
     for method, (positionErrors, velocityErrors) in results.items():
-        print(f"{names[method][0]:<20}{names[method][1]:<26}{positionErrors.max():>16.2e}{np.median(positionErrors):>10.2e}"
+        say(f"{names[method][0]:<20}{names[method][1]:<26}{positionErrors.max():>16.2e}{np.median(positionErrors):>10.2e}"
               f"{velocityErrors.max():>17.2e}{np.median(velocityErrors):>10.2e}")
-    print("deviation of each particle relative to the body's size (positions) and to |omega| x size (velocities)")
+    say("deviation of each particle relative to the body's size (positions) and to |omega| x size (velocities)")
 
 
 # ---------------------------------------------------------------------------------------------------
@@ -277,46 +274,30 @@ def measureCost(count, seed, seconds, repetitions):
     integrators, contexts = {}, []
     for name, method in (("Exact", openmmrigid.RigidBodyIntegrator.Exact),
                          ("NoSquish", openmmrigid.RigidBodyIntegrator.NoSquish)):
-        integrator = openmmrigid.RigidBodyIntegrator(step_cost.STEP, bodies)
+        integrator = openmmrigid.RigidBodyIntegrator(STEP, bodies)
         integrator.setRotationMethod(method)
-        context = openmm.Context(system, integrator, cpu, step_cost.threadProperties("1"))
+        context = openmm.Context(system, integrator, cpu, cpuProperties("CPU", 1))
         context.setPositions(positions.reshape(-1, 3))
         context.setVelocitiesToTemperature(TEMPERATURE*unit.kelvin, 7)
         integrators[name] = integrator
         contexts.append(context)
     kinds = {integrators["Exact"].getBodyKind(b) for b in range(count)}
-    steps = step_cost.blockSteps(integrators["Exact"], None, seconds, 10)
+    steps = blockSteps(integrators["Exact"], None, seconds, 10)
     wall, cpu = timeInterleaved(integrators, steps, repetitions)
-    return ({name: step_cost.summary(samples, 1e9/count) for name, samples in wall.items()},
-            {name: step_cost.summary(samples, 1e9/count) for name, samples in cpu.items()}, steps, kinds)
-
-
-def timeInterleaved(integrators, steps, repetitions):
-    """step_cost.timeInterleaved, also recording the process's CPU time of each block: on a shared
-    machine other processes stretch the wall time of a block but not (much) the CPU time it uses.
-    Returns ({label: [wall s/step, ...]}, {label: [CPU s/step, ...]})."""
-    for integrator in integrators.values():
-        integrator.step(steps)
-    wall, cpu = {label: [] for label in integrators}, {label: [] for label in integrators}
-    for _ in range(repetitions):
-        for label, integrator in integrators.items():
-            startWall, startCpu = time.perf_counter(), time.process_time()
-            integrator.step(steps)
-            wall[label].append((time.perf_counter() - startWall)/steps)
-            cpu[label].append((time.process_time() - startCpu)/steps)
-    return wall, cpu
+    return ({name: medianRange(samples, 1e9/count) for name, samples in wall.items()},
+            {name: medianRange(samples, 1e9/count) for name, samples in cpu.items()}, steps, kinds)
 
 
 def printCost(wall, cpu, steps, kinds, count, repetitions):
-    print(f"\nPart 3: RigidBodyIntegrator alone, {count} six-mass asymmetric bodies (kinds found: {', '.join(sorted(kinds))}), "
+    say(f"\nPart 3: RigidBodyIntegrator alone, {count} six-mass asymmetric bodies (kinds found: {', '.join(sorted(kinds))}), "
           f"no forces, CPU platform, 1 thread, 2 fs; {repetitions} interleaved blocks of {steps} steps")
     widths = (27, 9, 9, 27, 9, 9)
     headings = ("wall ns/body/step: median", "min", "max", "CPU ns/body/step: median", "min", "max")
-    print(f"{'method':<12}" + "".join(f"{heading:>{width}}" for heading, width in zip(headings, widths)))
+    say(f"{'method':<12}" + "".join(f"{heading:>{width}}" for heading, width in zip(headings, widths)))
     for name in wall:
-        print(f"{name:<12}" + "".join(f"{value:>{width}.1f}" for value, width in zip(wall[name] + cpu[name], widths)))
+        say(f"{name:<12}" + "".join(f"{value:>{width}.1f}" for value, width in zip(wall[name] + cpu[name], widths)))
     wallRatio, cpuRatio = wall["Exact"][0]/wall["NoSquish"][0], cpu["Exact"][0]/cpu["NoSquish"][0]
-    print(f"Exact / NoSquish: {wallRatio:.2f} (wall), {cpuRatio:.2f} (CPU time; less sensitive to other work on the machine). "
+    say(f"Exact / NoSquish: {wallRatio:.2f} (wall), {cpuRatio:.2f} (CPU time; less sensitive to other work on the machine). "
           f"Both include the per-particle work the methods share (6 particles per body).")
     return cpuRatio
 
@@ -340,15 +321,15 @@ def printSummary(rows, ratio, comparison, total):
     sameCost = TYPICAL_STEP/ratio
     sameCostError = noSquish*ratio**(-order(rows, "NoSquish", "attitude_median_rad"))
     needed = interpolateStep(rows, "NoSquish", ERROR_TARGET)
-    print(f"\nSummary at dt = {TYPICAL_STEP:g} fs, free rotation for T = {total:g} ps (median attitude error):")
-    print(f"  first-order {typical['first-order']['attitude_median_rad']:.2e} rad, NoSquish {noSquish:.2e} rad, "
+    say(f"\nSummary at dt = {TYPICAL_STEP:g} fs, free rotation for T = {total:g} ps (median attitude error):")
+    say(f"  first-order {typical['first-order']['attitude_median_rad']:.2e} rad, NoSquish {noSquish:.2e} rad, "
           f"Exact: rounding (the C++ integrator against FreeRotor, part 2: {np.median(exactError):.1e}, "
           f"largest {exactError.max():.1e})")
-    print(f"  Exact costs {ratio:.2f} x NoSquish per body per step (CPU time). NoSquish given the same CPU time "
+    say(f"  Exact costs {ratio:.2f} x NoSquish per body per step (CPU time). NoSquish given the same CPU time "
           f"(dt = {sameCost:.2f} fs) would reach about {sameCostError:.1e} rad;")
-    print(f"  for a median error of {ERROR_TARGET:g} rad after {total:g} ps NoSquish needs dt = {needed:.3g} fs: "
+    say(f"  for a median error of {ERROR_TARGET:g} rad after {total:g} ps NoSquish needs dt = {needed:.3g} fs: "
           f"{TYPICAL_STEP/needed:.0f} x the steps, {TYPICAL_STEP/needed/ratio:.0f} x the cost of Exact at {TYPICAL_STEP:g} fs.")
-    print("  With forces both integrators are second order overall: the free-rotation error is only the part of the\n"
+    say("  With forces both integrators are second order overall: the free-rotation error is only the part of the\n"
           "  splitting error that Exact removes (examples/rigid_water.py: equal energy conservation in liquid water).")
 
 
@@ -378,18 +359,7 @@ def plot(path, rows, exactErrors, total, count, title):
         ax.grid(True, which="major", alpha=0.3)
         ax.legend(fontsize=7, loc="lower left")
     figure.suptitle(f"Free rotation against FreeRotor, T = {total:g} ps, {count} random asymmetric bodies; {title}", fontsize=9)
-    figure.tight_layout()
-    figure.savefig(path, dpi=130)
-    plt.close(figure)
-    print(f"wrote {path.relative_to(step_cost.ROOT)}")
-
-
-def writeCsv(path, rows):
-    with open(path, "w", newline="") as stream:
-        writer = csv.DictWriter(stream, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
-    print(f"wrote {path.relative_to(step_cost.ROOT)}")
+    saveFigure(figure, path)
 
 
 def parseArguments():
@@ -411,24 +381,30 @@ def parseArguments():
 
 def main():
     args = parseArguments()
-    RESULTS.mkdir(parents=True, exist_ok=True)
+    document = ResultsDocument("rotation_accuracy", "Free rotation alone: approximate schemes against the exact rotor",
+                               quick=args.quick, platform="Reference (parts 1, 2) and CPU (part 3)", threads=1,
+                               about="Method: the docstring of `benchmarks/rotation_accuracy.py`.")
     started = time.perf_counter()
-    print(f"{datetime.datetime.now():%Y-%m-%d %H:%M}; {step_cost.processorName()}, {os.cpu_count()} CPUs; "
-          f"OpenMM {openmm.version.full_version}, openmmrigid {openmmrigid.__version__}; load {step_cost.loadAverage()}; "
-          f"{'quick' if args.quick else 'default'} mode, seed {args.seed}")
+    for line in header("Reference and CPU", 1):
+        say(line)
+    say(f"{'quick' if args.quick else 'default'} mode, seed {args.seed}")
     moments, attitudes, omegas = randomBodies(args.bodies, args.seed)
-    rows = measureAccuracy(moments, attitudes, omegas, args.time, args.steps)
-    printAccuracy(rows, args.time, args.bodies)
-    steps, comparison = compareWithIntegrator(moments, attitudes, omegas, args.time, TYPICAL_STEP)
-    printComparison(steps, comparison, args.time, TYPICAL_STEP, args.bodies)
-    wall, cpu, costSteps, kinds = measureCost(args.costBodies, args.seed + 1, args.seconds, args.repetitions)
-    ratio = printCost(wall, cpu, costSteps, kinds, args.costBodies, args.repetitions)
-    printSummary(rows, ratio, comparison, args.time)
-    print()
+    with document.capture():
+        rows = measureAccuracy(moments, attitudes, omegas, args.time, args.steps)
+        printAccuracy(rows, args.time, args.bodies)
+        steps, comparison = compareWithIntegrator(moments, attitudes, omegas, args.time, TYPICAL_STEP)
+        printComparison(steps, comparison, args.time, TYPICAL_STEP, args.bodies)
+        wall, cpu, costSteps, kinds = measureCost(args.costBodies, args.seed + 1, args.seconds, args.repetitions)
+        ratio = printCost(wall, cpu, costSteps, kinds, args.costBodies, args.repetitions)
+        printSummary(rows, ratio, comparison, args.time)
+    say()
     writeCsv(RESULTS / "rotation_accuracy.csv", rows)
-    plot(RESULTS / "rotation_accuracy.png", rows, comparison[openmmrigid.RigidBodyIntegrator.Exact], args.time, args.bodies,
+    figure = document.figurePath("rotation_accuracy.png")
+    plot(figure, rows, comparison[openmmrigid.RigidBodyIntegrator.Exact], args.time, args.bodies,
          f"{datetime.date.today()}{' (quick)' if args.quick else ''}")
-    print(f"total {time.perf_counter() - started:.0f} s")
+    document.figure(figure, "rotation accuracy")
+    document.write()
+    say(f"total {time.perf_counter() - started:.0f} s")
 
 
 if __name__ == "__main__":

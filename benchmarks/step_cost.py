@@ -11,7 +11,7 @@ nothing else is inside the timed region. Reported: the median ms/step of each an
 
 Part 2, the integrator alone: Systems of N (8000) rigid bodies with no forces at all (a System with
 particles and, for water, its constraints: the cheapest force evaluation there is; a zero-energy
-CustomExternalForce still loops over the particles, about 28 ns/particle/step more on one thread),
+CustomExternalForce would still loop over the particles),
 random orientations, velocities from setVelocitiesToTemperature(300 K). Body kinds: water (TIP3P
 geometry, asymmetric, bodies found from the constraints) and, as explicit bodies, linear CO2 (3
 collinear particles), a spherical CH4-like top (centre + 4 tetrahedral H), a symmetric NH3-like top
@@ -28,39 +28,30 @@ The states are prepared on the CPU platform either way.
     python benchmarks/step_cost.py --quick    # small sizes, short blocks: under 2 minutes
     python benchmarks/step_cost.py --platform OpenCL --sizes 2000 --models tip4pew --only boxes
 
-Writes benchmarks/results/step_cost.csv, integrator_only.csv, step_cost.png and step_cost.log (a
-copy of what is printed); on a GPU platform with its name and precision in each file name
-(step_cost_OpenCL_mixed.csv, ...).
+Writes docs/results/step_cost.md (the tables, with the command; a --quick run writes
+benchmarks/results/step_cost.md instead), and benchmarks/results/step_cost.csv, integrator_only.csv, step_cost.png and step_cost.log
+(a copy of what is printed); on a GPU platform with its name and precision in each file name
+(step_cost_OpenCL_mixed.md, ...).
 """
 
 import argparse
-import csv
 import datetime
-import hashlib
 import math
-import os
-import platform as pyplatform
-import shlex
 import statistics
-import subprocess
 import sys
 import time
-from pathlib import Path
 
-import matplotlib
 import numpy as np
 import openmm
-from openmm import app, unit
+from openmm import unit
 
 import openmmrigid
-from reporting import openLog, say, stamp
+from benchmarking import (RESULTS, ResultsDocument, blockSteps, header, loadAverage, machine, medianRange, openLog,
+                          pyplot, say, saveFigure, stamp, timeInterleaved, writeCsv)
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402 (after choosing the backend)
-import matplotlib.ticker  # noqa: E402
+plt = pyplot()
+import matplotlib.ticker  # noqa: E402 (after pyplot() chose the backend)
 
-ROOT = Path(__file__).resolve().parent.parent
-RESULTS = ROOT / "benchmarks" / "results"
 STEP = 2*unit.femtosecond
 PLATFORM_NAME = ["CPU"]  # the platform timed, for the tables (set by main)
 CUTOFF = 0.9*unit.nanometer
@@ -68,60 +59,14 @@ TEMPERATURE = 300*unit.kelvin
 MODEL_NAMES = {"tip3p": "TIP3P", "tip4pew": "TIP4P-Ew"}
 STOCK, EXACT, NOSQUISH = "VerletIntegrator+SETTLE", "RigidBodyIntegrator/Exact", "RigidBodyIntegrator/NoSquish"
 
+
 # ---------------------------------------------------------------------------------------------------
 # Machine, options
 
-def processorName():
-    try:
-        for line in subprocess.run(["lscpu"], capture_output=True, text=True, check=True).stdout.splitlines():
-            if line.startswith("Model name:"):
-                return line.split(":", 1)[1].strip()
-    except (OSError, subprocess.CalledProcessError):
-        pass
-    return pyplatform.processor() or pyplatform.machine()
-
-
-def gitDescription():
-    try:
-        head = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True,
-                              text=True, check=True).stdout.strip()
-        dirty = subprocess.run(["git", "-C", str(ROOT), "status", "--porcelain", "--untracked-files=no"],
-                               capture_output=True, text=True, check=True).stdout.strip()
-        return head + (" (tracked files modified)" if dirty else "")
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
-
-
-def loadAverage():
-    try:
-        return " ".join(Path("/proc/loadavg").read_text().split()[:3])
-    except OSError:
-        return "unknown"
-
-
-def libraryStamp():
-    """When the loaded plugin libraries were built, and a hash (the C++ may be rebuilt between runs)."""
-    folder = Path(openmmrigid.__file__).parent
-    digest, newest = hashlib.sha256(), 0.0
-    libraries = sorted(folder.glob("*.so")) + sorted(folder.glob("*.dylib")) + sorted(folder.glob("*.dll"))
-    for library in libraries:
-        digest.update(library.read_bytes())
-        newest = max(newest, library.stat().st_mtime)
-    if not libraries:
-        return "no libraries found"
-    return f"built {datetime.datetime.fromtimestamp(newest):%Y-%m-%d %H:%M:%S}, sha256 {digest.hexdigest()[:12]}"
-
-
-def printHeader(args, cpu):
-    say(f"command:   {shlex.join([sys.executable] + sys.argv)}")
-    say(f"date:      {datetime.datetime.now().astimezone():%Y-%m-%d %H:%M:%S %Z}")
-    say(f"machine:   {processorName()}, {pyplatform.machine()}, os.cpu_count() = {os.cpu_count()}, "
-        f"CPU platform default Threads = {openmm.Platform.getPlatformByName('CPU').getPropertyDefaultValue('Threads')}")
-    say(f"software:  OpenMM {openmm.version.full_version} (Platform.getOpenMMVersion {openmm.Platform.getOpenMMVersion()}), "
-        f"openmmrigid {openmmrigid.__version__}")
-    say(f"plugin:    {Path(openmmrigid.__file__).parent} ({libraryStamp()}); source tree git {gitDescription()}")
-    say(f"load:      {loadAverage()} (1, 5, 15 min) before starting; other work on these cores distorts the timings")
-    say(f"settings:  {'quick' if args.quick else 'full'}; step 2 fs; repetitions {args.repetitions}; "
+def printHeader(args):
+    for line in header(PLATFORM_NAME[0]):
+        say(line)
+    say(f"settings: {'quick' if args.quick else 'full'}; step 2 fs; repetitions {args.repetitions}; "
         f"block target {args.seconds:g} s unless --steps; threads {', '.join(args.threads)}")
     say()
 
@@ -178,72 +123,18 @@ def parseArguments():
 
 
 # ---------------------------------------------------------------------------------------------------
-# Timing
-
-def timeBlock(integrator, steps):
-    start = time.perf_counter()
-    integrator.step(steps)
-    return time.perf_counter() - start
-
-
-def secondsPerStep(integrator, target):
-    """A rough cost per step: time blocks of 1, 4, 16, ... steps until one takes a tenth of the target.
-
-    Two untimed steps first: a Context's first step also sets things up (bodies, neighbour lists).
-    """
-    integrator.step(2)
-    steps = 1
-    while True:
-        elapsed = timeBlock(integrator, steps)
-        if elapsed >= 0.1*target or steps >= 1 << 16:
-            return elapsed/steps
-        steps *= 4
-
-
-def blockSteps(integrator, fixed, target, minimum):
-    """Steps per timed block: `fixed` if given, else enough for `target` seconds (at least `minimum`)."""
-    if fixed:
-        return fixed
-    return max(minimum, int(round(target/secondsPerStep(integrator, target))))
-
-
-def timeInterleaved(integrators, steps, repetitions):
-    """Warm up each integrator with one block, then time `repetitions` blocks each, interleaved.
-
-    integrators: {label: integrator}, each bound to its own Context. Returns {label: [s/step, ...]}.
-    """
-    for integrator in integrators.values():
-        integrator.step(steps)
-    times = {label: [] for label in integrators}
-    for _ in range(repetitions):
-        for label, integrator in integrators.items():
-            times[label].append(timeBlock(integrator, steps)/steps)
-    return times
-
-
-def summary(samples, scale):
-    values = [scale*value for value in samples]
-    return statistics.median(values), min(values), max(values)
-
-
-# ---------------------------------------------------------------------------------------------------
 # Part 1: water boxes with PME
 
 def buildBox(model, molecules):
-    forceField = app.ForceField(f"{model}.xml")
-    modeller = app.Modeller(app.Topology(), [])
-    modeller.addSolvent(forceField, model=model, numAdded=molecules)
-    system = forceField.createSystem(modeller.topology, nonbondedMethod=app.PME, nonbondedCutoff=CUTOFF,
-                                     rigidWater=True)
-    return modeller, system
+    return openmmrigid.testing.waterBox(model, molecules=molecules, nonbondedCutoff=CUTOFF, ewaldErrorTolerance=5e-4)
 
 
-def equilibratedState(modeller, system, cpu, steps, iterations):
+def equilibratedState(positions, system, cpu, steps, iterations):
     """Minimize (at most `iterations`), then run `steps` steps of LangevinMiddleIntegrator at 300 K (default threads)."""
     integrator = openmm.LangevinMiddleIntegrator(TEMPERATURE, 1/unit.picosecond, STEP)
     integrator.setRandomNumberSeed(2024)
     context = openmm.Context(system, integrator, cpu)
-    context.setPositions(modeller.positions)
+    context.setPositions(positions)
     openmm.LocalEnergyMinimizer.minimize(context, 10, iterations)
     context.setVelocitiesToTemperature(TEMPERATURE, 2024)
     integrator.step(steps)
@@ -272,11 +163,11 @@ def measureBox(model, molecules, system, state, cpu, threads, args):
     if bodies != molecules:
         say(f"  WARNING: RigidBodyIntegrator found {bodies} bodies in {molecules} waters")
     steps = blockSteps(integrators[STOCK], args.steps, args.seconds, 20)
-    times = timeInterleaved(integrators, steps, args.repetitions)
+    times, _ = timeInterleaved(integrators, steps, args.repetitions)
     stockMedian = statistics.median(times[STOCK])
     rows = []
     for label, samples in times.items():
-        median, low, high = summary(samples, 1e3)
+        median, low, high = medianRange(samples, 1e3)
         rows.append({"model": model, "molecules": molecules, "integrator": label, "threads": actualThreads,
                      "median_ms_per_step": f"{median:.4f}", "ratio_to_stock": f"{statistics.median(samples)/stockMedian:.4f}",
                      "repetitions": args.repetitions, "steps": steps,
@@ -295,9 +186,9 @@ def runBoxes(args, cpu):
             stamp(f"{MODEL_NAMES[model]} {molecules}: building, minimizing ({args.minimizeIterations} iterations), "
                      f"{args.equilibrationSteps} Langevin steps")
             started = time.perf_counter()
-            modeller, system = buildBox(model, molecules)
-            waters = modeller.topology.getNumResidues()
-            state = equilibratedState(modeller, system, openmm.Platform.getPlatformByName("CPU"), args.equilibrationSteps,
+            topology, positions, system = buildBox(model, molecules)
+            waters = topology.getNumResidues()
+            state = equilibratedState(positions, system, openmm.Platform.getPlatformByName("CPU"), args.equilibrationSteps,
                                       args.minimizeIterations)
             stamp(f"  {waters} waters, {system.getNumParticles()} particles; ready in {time.perf_counter() - started:.0f} s")
             for threads in args.threads:
@@ -346,13 +237,6 @@ BODY_KINDS = {
 }
 
 
-def randomRotation(rng):
-    w, x, y, z = (lambda q: q/np.linalg.norm(q))(rng.normal(size=4))  # uniform on SO(3)
-    return np.array([[1 - 2*(y*y + z*z), 2*(x*y - w*z), 2*(x*z + w*y)],
-                     [2*(x*y + w*z), 1 - 2*(x*x + z*z), 2*(y*z - w*x)],
-                     [2*(x*z - w*y), 2*(y*z + w*x), 1 - 2*(x*x + y*y)]])
-
-
 def bodySystem(kind, count, seed=1):
     """A System of `count` randomly oriented bodies of one kind, all centred at the origin, no forces.
 
@@ -368,7 +252,7 @@ def bodySystem(kind, count, seed=1):
     system, positions, bodies = openmm.System(), [], []
     rng = np.random.default_rng(seed)
     for index in range(count):
-        rotation = randomRotation(rng)
+        rotation = openmmrigid.testing.randomRotation(rng)
         body = [system.addParticle(mass) for mass in masses]
         positions.extend(openmm.Vec3(*(rotation@r)) for r in local)
         bodies.append(body)
@@ -413,13 +297,13 @@ def measureKind(kind, cpu, threads, args):
         contexts.append(context)
     actualThreads = threadsOf(cpu, contexts[0])
     steps = blockSteps(integrators["Exact"], args.body_steps, args.seconds/2, 10)  # steadier than the boxes
-    times = timeInterleaved(integrators, steps, args.repetitions)
+    times, _ = timeInterleaved(integrators, steps, args.repetitions)
     kinds = foundKinds(integrators["Exact"], BODY_KINDS[kind][3], kind)
     count = integrators["Exact"].getNumBodies()
     ratio = statistics.median(times["Exact"])/statistics.median(times["NoSquish"])
     rows = []
     for method, samples in times.items():
-        median, low, high = summary(samples, 1e9/count)
+        median, low, high = medianRange(samples, 1e9/count)
         rows.append({"kind": kind, "particles_per_body": len(BODY_KINDS[kind][1]), "bodies": count, "method": method,
                      "threads": actualThreads, "median_ns_per_body_step": f"{median:.2f}",
                      "exact_to_nosquish": "" if method == "stock" else f"{ratio:.4f}", "repetitions": args.repetitions, "steps": steps,
@@ -455,17 +339,6 @@ def printBodyTable(rows):
     say("Each includes the fixed cost of a step (the Python call, an empty force evaluation) spread over the\n"
         "bodies. (stock): VerletIntegrator on the same System, for scale only: SETTLE for water, free\n"
         "particles for the other kinds; nothing is subtracted.")
-
-
-# ---------------------------------------------------------------------------------------------------
-# Output
-
-def writeCsv(path, rows):
-    with open(path, "w", newline="") as stream:
-        writer = csv.DictWriter(stream, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
-    say(f"wrote {path.relative_to(ROOT)}")
 
 
 def plotBoxes(axes, rows):
@@ -515,15 +388,11 @@ def plot(path, boxRows, bodyRows, title):
     for (function, rows), ax in zip(panels, axes[:, 0]):
         function(ax, rows)
     figure.suptitle(title, fontsize=9)
-    figure.tight_layout()
-    figure.savefig(path, dpi=130)
-    plt.close(figure)
-    say(f"wrote {path.relative_to(ROOT)}")
+    saveFigure(figure, path)
 
 
 def main():
     args = parseArguments()
-    RESULTS.mkdir(parents=True, exist_ok=True)
     suffix = "" if args.platform == "CPU" else f"_{args.platform}_{args.precision}"
     openLog(RESULTS / f"step_cost{suffix}.log")
     cpu = openmm.Platform.getPlatformByName(args.platform)  # the platform timed
@@ -533,22 +402,30 @@ def main():
     else:
         args.threads = [args.precision]
     PLATFORM_NAME[0] = args.platform if args.platform == "CPU" else f"{args.platform} ({args.precision} precision)"
-    printHeader(args, cpu)
+    document = ResultsDocument(f"step_cost{suffix}", f"Cost per step against stock OpenMM, {PLATFORM_NAME[0]} platform",
+                               quick=args.quick, platform=PLATFORM_NAME[0],
+                               about="Method: the docstring of `benchmarks/step_cost.py`. Threads: "
+                                     f"{', '.join(args.threads)}.")
+    printHeader(args)
     start = time.perf_counter()
     boxRows = runBoxes(args, cpu) if args.only != "bodies" else []
     bodyRows = runBodies(args, cpu) if args.only != "boxes" else []
-    if boxRows:
-        printBoxTable(boxRows)
-    if bodyRows:
-        printBodyTable(bodyRows)
+    with document.capture():
+        if boxRows:
+            printBoxTable(boxRows)
+        if bodyRows:
+            printBodyTable(bodyRows)
     say()
     if boxRows:
         writeCsv(RESULTS / f"step_cost{suffix}.csv", boxRows)
     if bodyRows:
         writeCsv(RESULTS / f"integrator_only{suffix}.csv", bodyRows)
-    plot(RESULTS / f"step_cost{suffix}.png", boxRows, bodyRows,
-         f"openmm-rigid step cost, {args.platform}{' ' + args.precision if suffix else ''}, {processorName()}, {os.cpu_count()} CPUs, OpenMM {openmm.version.full_version}, "
+    figure = document.figurePath(f"step_cost{suffix}.png")
+    plot(figure, boxRows, bodyRows,
+         f"openmm-rigid step cost, {PLATFORM_NAME[0]}, {machine()}, OpenMM {openmm.version.full_version}, "
          f"{datetime.date.today()}{' (quick)' if args.quick else ''}")
+    document.figure(figure, "step cost")
+    document.write()
     say(f"total {time.perf_counter() - start:.0f} s; load average now {loadAverage()}")
 
 

@@ -2,7 +2,7 @@
 """Stability stress runs of RigidBodyIntegrator (Exact and NoSquish), next to stock
 VerletIntegrator + SETTLE where the System allows it.
 
-Scenarios (built by tests/python/stress_systems.py, shared with tests/python/test_stress.py):
+Scenarios (built by openmmrigid.testing.stress, shared with the test suite's tests/python/test_stress.py):
 
   a. Rigid water, TIP3P and TIP4P-Ew (PME, about 500 molecules; fewer with --quick), NVE from a
      300 K state: short runs (1 ps) at 4, 5, ... 12 fs find the largest stable step of each
@@ -38,7 +38,7 @@ Criteria (each run prints one line; a run of a rigid integrator fails if any is 
   - alone (no forces), Exact keeps the spinning body's energy to 1e-12 relative and follows its
     exact free motion (openmmrigid.FreeRotor from its starting state) to 1e-12 rad per radian
     turned: the rotation frequency is known to the rounding of the energy, so the angle's error
-    grows with the angle turned (seen: 1e-14 to 1e-13 per radian). In the bath scenarios at least a
+    grows with the angle turned. In the bath scenarios at least a
     few separatrix crossings must be seen.
 Stock Verlet + SETTLE is measured by the same yardstick and reported, but never fails the run.
 
@@ -46,27 +46,20 @@ Stock Verlet + SETTLE is measured by the same yardstick and reported, but never 
     python benchmarks/stress.py             # about 15 minutes
     options: --platform Reference|CPU (default CPU), --seed N, --only TEXT (scenarios whose name contains TEXT)
 
-Exits with status 1 if any criterion fails. Writes a copy of the output to benchmarks/results/stress.log.
+Exits with status 1 if any criterion fails. Writes docs/results/stress.md (the summary table; a quick
+run: benchmarks/results/stress.md) and a copy of the output to benchmarks/results/stress.log.
 """
 
 import argparse
-import datetime
-import os
-import platform as pyplatform
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 import openmm
 
-ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT / "tests" / "python"))
-
-import openmmrigid  # noqa: E402
-import stress_systems as stress  # noqa: E402
-from reporting import closeLog, openLog, say  # noqa: E402
-import systems  # noqa: E402
+from benchmarking import RESULTS, ResultsDocument, closeLog, header, openLog, say
+from openmmrigid.testing import stress
+from openmmrigid.testing import stress as systems  # the cluster, exact rigid motion and state helpers
 
 ENERGY_BUDGET = 0.01          # of the initial kinetic energy
 STABILITY_BUDGET = 0.05       # of the initial kinetic energy: water at the edge of stability
@@ -191,7 +184,7 @@ def water_scan(args, model):
                 break
             best = fs
         largest[name] = best
-    say(f"  largest stable step in the scan: " + ", ".join(f"{name} {fs} fs" for name, fs in largest.items()))
+    say("  largest stable step in the scan: " + ", ".join(f"{name} {fs} fs" for name, fs in largest.items()))
     final = {}
     for name in (STOCK, "Exact", "NoSquish"):
         fs = largest[name]
@@ -302,6 +295,34 @@ def spin_in_bath(args):
         report(row, scenario)
 
 
+def summarize(args, start, largest):
+    """The summary table of every run; returns the number of failing runs."""
+    say(f"Summary ({args.platform}, {time.perf_counter() - start:.0f} s)")
+    heading = (f"{'scenario':<44} {'integrator':<13} {'dt fs':>6} {'ps':>6} {'max|dE|/KE0':>11} {'drift/dof':>9} "
+               f"{'finite':>6} {'rigid nm':>8} {'dP':>8} {'dL/L0':>8} {'cross':>5}  verdict")
+    say(heading)
+    say("-" * len(heading))
+    failed = 0
+    for row in ROWS:
+        run = row.run
+        verdict = "-" if not row.judged else ("ok" if not row.failures else "FAIL: " + "; ".join(row.failures))
+        failed += bool(row.judged and row.failures)
+        if run is None:
+            say(f"{row.scenario[:44]:<44} {row.integrator:<13} {'':>75}  {verdict}")
+            continue
+        dP = "PME" if row.pme else f"{run.relative_momentum_change():.0e}"
+        dL = run.relative_angular_change()
+        say(f"{row.scenario[:44]:<44} {row.integrator:<13} {1000 * row.stepSize:6.3g} {run.steps * run.stepSize:6.3g} "
+            f"{run.max_energy_change() / run.kinetic0:11.1e} {1000 * run.drift() / run.dof:+9.2g} "
+            f"{'yes' if run.finite and not run.error else 'NO':>6} {run.rigidity:8.0e} {dP:>8} "
+            f"{'-' if dL is None else f'{dL:.0e}':>8} {int(np.sum(run.crossings)):5d}  {verdict}")
+    for key, steps in largest.items():
+        say(f"largest stable step, {key}: " + ", ".join(f"{name} {'none' if fs is None else f'{fs} fs'}"
+                                                     for name, fs in steps.items()))
+    say(f"{failed} failing run(s)" if failed else "all criteria met")
+    return failed
+
+
 # ---------------------------------------------------------------------------------------------------
 
 def main():
@@ -311,13 +332,13 @@ def main():
     parser.add_argument("--seed", type=int, default=5)
     parser.add_argument("--only", default="", help="run only the scenarios whose name contains this text")
     args = parser.parse_args()
-    results = ROOT / "benchmarks" / "results"
-    results.mkdir(parents=True, exist_ok=True)
-    openLog(results / "stress.log")
-    say(f"command:  {' '.join([sys.executable] + sys.argv)}")
-    say(f"date:     {datetime.datetime.now().astimezone():%Y-%m-%d %H:%M:%S %Z}; {pyplatform.machine()}, "
-        f"{os.cpu_count()} cores; OpenMM {openmm.version.full_version}, openmmrigid {openmmrigid.__version__}")
+    openLog(RESULTS / "stress.log")
+    for line in header(args.platform):
+        say(line)
     say(f"settings: {'quick' if args.quick else 'full'}, platform {args.platform}, seed {args.seed}")
+    document = ResultsDocument("stress", "Stability under stress", quick=args.quick, platform=args.platform,
+                               about="Method and criteria: the docstring of `benchmarks/stress.py`." +
+                                     (f" Only the scenarios matching `{args.only}`." if args.only else ""))
     start = time.perf_counter()
     scenarios = [
         ("water-tip3p", lambda: water_scan(args, "tip3p")),
@@ -337,29 +358,9 @@ def main():
             if key.startswith("water"):
                 largest[key] = result
 
-    say(f"\nSummary ({args.platform}, {time.perf_counter() - start:.0f} s)")
-    header = (f"{'scenario':<44} {'integrator':<13} {'dt fs':>6} {'ps':>6} {'max|dE|/KE0':>11} {'drift/dof':>9} "
-              f"{'finite':>6} {'rigid nm':>8} {'dP':>8} {'dL/L0':>8} {'cross':>5}  verdict")
-    say(header)
-    say("-" * len(header))
-    failed = 0
-    for row in ROWS:
-        run = row.run
-        verdict = "-" if not row.judged else ("ok" if not row.failures else "FAIL: " + "; ".join(row.failures))
-        failed += bool(row.judged and row.failures)
-        if run is None:
-            say(f"{row.scenario[:44]:<44} {row.integrator:<13} {'':>75}  {verdict}")
-            continue
-        dP = "PME" if row.pme else f"{run.relative_momentum_change():.0e}"
-        dL = run.relative_angular_change()
-        say(f"{row.scenario[:44]:<44} {row.integrator:<13} {1000 * row.stepSize:6.3g} {run.steps * run.stepSize:6.3g} "
-            f"{run.max_energy_change() / run.kinetic0:11.1e} {1000 * run.drift() / run.dof:+9.2g} "
-            f"{'yes' if run.finite and not run.error else 'NO':>6} {run.rigidity:8.0e} {dP:>8} "
-            f"{'-' if dL is None else f'{dL:.0e}':>8} {int(np.sum(run.crossings)):5d}  {verdict}")
-    for key, steps in largest.items():
-        say(f"largest stable step, {key}: " + ", ".join(f"{name} {'none' if fs is None else f'{fs} fs'}"
-                                                     for name, fs in steps.items()))
-    say(f"{failed} failing run(s)" if failed else "all criteria met")
+    with document.capture():
+        failed = summarize(args, start, largest)
+    document.write()
     closeLog()
     return 1 if failed else 0
 

@@ -20,40 +20,31 @@ samples every 0.1 ps:
 
 Errors are standard errors of the mean from block averages (10 blocks in the full mode, 5 in the
 quick one). The density under a Monte Carlo barostat and the temperatures with friction 1/ps
-correlate over picoseconds: the 1.6 ps blocks of the quick mode understate the errors, and even the
+correlate over picoseconds: the 0.8 ps blocks of the quick mode understate the errors, and even the
 6 ps blocks of the full mode may. The table lists each run and, per step size, the difference between the two
 integrators in units of its combined error. The plot shows g_OO(r) of the four runs and the
 differences with their 2-sigma bands.
 
     python benchmarks/thermostat_comparison.py            # full: 60 ps per run, about 15 to 20 minutes on 2 cores
-    python benchmarks/thermostat_comparison.py --quick    # 8 ps per run, 2 to 3 minutes (errors underestimated)
+    python benchmarks/thermostat_comparison.py --quick    # a smoke check: 4 ps per run, a few minutes
 
-Writes benchmarks/results/thermostat_comparison.png, thermostat_comparison.csv (the table) and
-thermostat_comparison.log (a copy of what is printed).
+Writes docs/results/thermostat_comparison.md and docs/figures/thermostat_comparison.png (a quick run:
+both in benchmarks/results/), and benchmarks/results/thermostat_comparison.csv (the table) and .log
+(a copy of what is printed).
 """
 
 import argparse
-import csv
-import datetime
-import os
-import platform as pyplatform
 import sys
 import time
-from pathlib import Path
 
-import matplotlib
 import numpy as np
 import openmm
 from openmm import app, unit
 
 import openmmrigid
-from reporting import openLog, say, stamp
+from benchmarking import (RESULTS, ResultsDocument, blockMean, cpuProperties, header, molecularKineticEnergies, openLog,
+                          pyplot, radialDistribution, say, saveFigure, stamp, writeCsv)
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402 (after choosing the backend)
-
-ROOT = Path(__file__).resolve().parent.parent
-RESULTS = ROOT / "benchmarks" / "results"
 TEMPERATURE = 300*unit.kelvin
 FRICTION = 1/unit.picosecond
 PRESSURE = 1*unit.bar
@@ -70,17 +61,12 @@ BOLTZMANN = unit.MOLAR_GAS_CONSTANT_R.value_in_unit(unit.kilojoule_per_mole/unit
 
 def buildBox(molecules):
     """A cubic box of about `molecules` TIP4P-Ew waters with PME and a MonteCarloBarostat."""
-    forceField = app.ForceField("tip4pew.xml")
-    modeller = app.Modeller(app.Topology(), [])
-    edge = (molecules/33.4)**(1/3)  # liquid water holds about 33.4 molecules per nm^3
-    modeller.addSolvent(forceField, model="tip4pew", boxSize=openmm.Vec3(edge, edge, edge)*unit.nanometer)
-    system = forceField.createSystem(modeller.topology, nonbondedMethod=app.PME,
-                                     nonbondedCutoff=min(0.9, 0.45*edge)*unit.nanometer, rigidWater=True,
-                                     ewaldErrorTolerance=5e-4)
+    edge = (molecules/openmmrigid.testing.WATERS_PER_CUBIC_NANOMETRE)**(1/3)
+    topology, positions, system = openmmrigid.testing.waterBox("tip4pew", edge=edge)
     barostat = openmm.MonteCarloBarostat(PRESSURE, TEMPERATURE, BAROSTAT_INTERVAL)
     barostat.setRandomNumberSeed(11)
     system.addForce(barostat)
-    return modeller, system
+    return topology, positions, system
 
 
 class Molecules:
@@ -94,29 +80,19 @@ class Molecules:
             self.atoms.append(massive)
             self.oxygens.extend(atom.index for atom in residue.atoms() if atom.element == app.element.oxygen)
         self.atoms = np.array(self.atoms)                         # (N, 3): O, H, H
-        self.masses = np.array([[system.getParticleMass(int(i)).value_in_unit(unit.dalton) for i in row]
-                                for row in self.atoms])
+        self.particleMasses = np.array([system.getParticleMass(i).value_in_unit(unit.dalton)
+                                        for i in range(system.getNumParticles())])
+        self.masses = self.particleMasses[self.atoms]
         self.oxygens = np.array(self.oxygens)
         self.count = len(self.atoms)
         self.totalMass = self.masses.sum()
 
-    def kineticEnergies(self, velocities):
-        """Translational (centres of mass) and rotational (the rest) kinetic energy, kJ/mol."""
-        v = velocities[self.atoms]                                # (N, 3, 3)
-        momentum = np.einsum("na,nak->nk", self.masses, v)
-        molecularMass = self.masses.sum(axis=1)
-        centre = momentum/molecularMass[:, None]
-        translational = 0.5*np.sum(molecularMass*np.sum(centre**2, axis=1))
-        relative = v - centre[:, None, :]
-        rotational = 0.5*np.sum(self.masses[:, :, None]*relative**2)
-        return translational, rotational
 
-
-def equilibratedState(system, positions, platform, time_ps, stepFs):
+def equilibratedState(system, positions, platform, properties, time_ps, stepFs):
     """Minimize, then equilibrate with LangevinMiddleIntegrator + SETTLE (and the barostat)."""
     integrator = openmm.LangevinMiddleIntegrator(TEMPERATURE, FRICTION, stepFs*unit.femtosecond)
     integrator.setRandomNumberSeed(1)
-    context = openmm.Context(system, integrator, platform)
+    context = openmm.Context(system, integrator, platform, properties)
     context.setPositions(positions)
     openmm.LocalEnergyMinimizer.minimize(context, 10, 500)
     context.setVelocitiesToTemperature(TEMPERATURE, 1)
@@ -139,10 +115,10 @@ def makeIntegrator(kind, stepFs, seed):
     return integrator
 
 
-def simulate(system, state, molecules, platform, kind, stepFs, equilibrate_ps, production_ps, seed):
+def simulate(system, state, molecules, platform, properties, kind, stepFs, equilibrate_ps, production_ps, seed):
     """One run: returns the samples (dict of arrays), the oxygen frames and boxes, and ms per step."""
     integrator = makeIntegrator(kind, stepFs, seed)
-    context = openmm.Context(system, integrator, platform)
+    context = openmm.Context(system, integrator, platform, properties)
     context.setState(state)
     dt_ps = stepFs/1000
     integrator.step(int(round(equilibrate_ps/dt_ps)))
@@ -161,7 +137,7 @@ def simulate(system, state, molecules, platform, kind, stepFs, equilibrate_ps, p
         box = current.getPeriodicBoxVectors(asNumpy=True).value_in_unit(unit.nanometer)
         volume = np.linalg.det(box)
         velocities = current.getVelocities(asNumpy=True).value_in_unit(unit.nanometer/unit.picosecond)
-        translational, rotational = molecules.kineticEnergies(velocities)
+        translational, rotational = molecularKineticEnergies(velocities, molecules.particleMasses, molecules.atoms)
         data["density"].append(molecules.totalMass/volume*AMU_PER_NM3_IN_G_PER_ML)
         data["potential"].append(current.getPotentialEnergy().value_in_unit(unit.kilojoule_per_mole)/molecules.count)
         data["translational"].append(2*translational/((3*molecules.count - 3)*BOLTZMANN))
@@ -176,32 +152,6 @@ def simulate(system, state, molecules, platform, kind, stepFs, equilibrate_ps, p
 # Analysis
 # ---------------------------------------------------------------------------------------------------
 
-def blockMean(values, blocks):
-    """The mean and its standard error from `blocks` consecutive block means."""
-    values = np.asarray(values)
-    n = len(values)//blocks*blocks
-    means = values[:n].reshape(blocks, -1, *values.shape[1:]).mean(axis=1)
-    return values[:n].mean(axis=0), means.std(axis=0, ddof=1)/np.sqrt(blocks)
-
-
-def radialDistribution(frames, boxes):
-    """g_OO(r) for each frame (minimum image in a cubic box), on bins of RDF_BIN up to RDF_MAX nm."""
-    edges = np.arange(0.0, RDF_MAX + RDF_BIN/2, RDF_BIN)
-    shells = 4/3*np.pi*(edges[1:]**3 - edges[:-1]**3)
-    upper = np.triu_indices(frames.shape[1], k=1)
-    result = []
-    for positions, box in zip(frames, boxes):
-        delta = positions[:, None, :] - positions[None, :, :]
-        delta -= box*np.round(delta/box)
-        distances = np.sqrt(np.sum(delta**2, axis=-1))[upper]
-        counts, _ = np.histogram(distances, bins=edges)
-        n = len(positions)
-        density = n/np.prod(box)
-        result.append(2*counts/(n*density*shells))
-    centres = 0.5*(edges[1:] + edges[:-1])
-    return centres, np.array(result)
-
-
 def firstPeak(radii, g):
     """Height and position of the first maximum of g_OO (between 0.25 and 0.32 nm)."""
     window = (radii > 0.25) & (radii < 0.32)
@@ -211,95 +161,98 @@ def firstPeak(radii, g):
 
 # ---------------------------------------------------------------------------------------------------
 
-def main():
+NAMES = {"rigid": "RigidBodyLangevinIntegrator (Exact)", "stock": "LangevinMiddleIntegrator + SETTLE"}
+QUANTITIES = [("density", "density (g/mL)", 4), ("potential", "U/molecule (kJ/mol)", 3),
+              ("translational", "T trans (K)", 1), ("rotational", "T rot (K)", 1), ("peak", "g_OO peak", 3)]
+
+
+def parseArguments():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--quick", action="store_true", help="8 ps per run instead of 60 (2 to 3 minutes)")
+    parser.add_argument("--quick", action="store_true",
+                        help="a smoke check: 4 ps per run instead of 60, after 5 ps of shared equilibration")
     parser.add_argument("--molecules", type=int, default=500, help="approximate number of waters (default 500)")
     parser.add_argument("--platform", default="CPU")
+    parser.add_argument("--threads", type=int, help="CPU platform threads (default: the platform's)")
     args = parser.parse_args()
     # The shared start: minimized, then equilibrated (the minimized box relaxes over several ps with
-    # friction 1/ps; the quick mode takes 4 fs steps to afford 10 ps). Each run then discards a
+    # friction 1/ps; the quick mode takes 4 fs steps). Each run then discards a
     # while of its own before sampling.
-    equilibrate, production, blocks, initial, initialStep = (2.0, 8.0, 5, 10.0, 4) if args.quick else (5.0, 60.0, 10, 20.0, 2)
+    args.equilibrate, args.production, args.blocks, args.initial, args.initialStep = \
+        (1.0, 4.0, 5, 5.0, 4) if args.quick else (5.0, 60.0, 10, 20.0, 2)
+    return args
 
-    RESULTS.mkdir(parents=True, exist_ok=True)
-    openLog(RESULTS/"thermostat_comparison.log")
-    platform = openmm.Platform.getPlatformByName(args.platform)
-    threads = platform.getPropertyDefaultValue("Threads") if args.platform == "CPU" else "-"
-    say(f"thermostat_comparison.py{' --quick' if args.quick else ''}: {datetime.datetime.now():%Y-%m-%d %H:%M}, "
-        f"{pyplatform.processor() or pyplatform.machine()}, {os.cpu_count()} cores, OpenMM {openmm.__version__}, "
-        f"openmm-rigid {openmmrigid.__version__}, platform {args.platform} ({threads} threads)")
-    started = time.perf_counter()
-    modeller, system = buildBox(args.molecules)
-    molecules = Molecules(modeller.topology, system)
+
+def runAll(args, platform, properties):
+    """The shared equilibration, then the four runs (each integrator at 2 and 4 fs)."""
+    topology, positions, system = buildBox(args.molecules)
+    molecules = Molecules(topology, system)
     say(f"{molecules.count} TIP4P-Ew waters, PME, MonteCarloBarostat (1 bar, every {BAROSTAT_INTERVAL} steps), "
-        f"300 K, friction 1/ps; each run: {equilibrate:g} ps discarded, {production:g} ps sampled; "
-        f"errors from {blocks} block means")
-    stamp(f"minimizing and equilibrating {initial:g} ps with LangevinMiddleIntegrator + SETTLE at {initialStep} fs")
-    state = equilibratedState(system, modeller.positions, platform, initial, initialStep)
-
+        f"300 K, friction 1/ps; each run: {args.equilibrate:g} ps discarded, {args.production:g} ps sampled; "
+        f"errors from {args.blocks} block means")
+    stamp(f"minimizing and equilibrating {args.initial:g} ps with LangevinMiddleIntegrator + SETTLE at "
+          f"{args.initialStep} fs")
+    state = equilibratedState(system, positions, platform, properties, args.initial, args.initialStep)
     runs = []
-    names = {"rigid": "RigidBodyLangevinIntegrator (Exact)", "stock": "LangevinMiddleIntegrator + SETTLE"}
     for stepFs in (2, 4):
         for kind in ("rigid", "stock"):
-            stamp(f"{names[kind]} at {stepFs} fs")
-            data, frames, boxes, msPerStep = simulate(system, state, molecules, platform, kind, stepFs, equilibrate,
-                                                      production, seed=100 + stepFs)
-            radii, g = radialDistribution(frames, boxes)
+            stamp(f"{NAMES[kind]} at {stepFs} fs")
+            data, frames, boxes, msPerStep = simulate(system, state, molecules, platform, properties, kind, stepFs,
+                                                      args.equilibrate, args.production, seed=100 + stepFs)
+            radii, g = radialDistribution(frames, boxes, RDF_MAX, RDF_BIN)
             runs.append(dict(kind=kind, step=stepFs, data=data, radii=radii, g=g, ms=msPerStep))
+    return molecules, runs
 
-    # The table.
-    quantities = [("density", "density (g/mL)", 4), ("potential", "U/molecule (kJ/mol)", 3),
-                  ("translational", "T trans (K)", 1), ("rotational", "T rot (K)", 1), ("peak", "g_OO peak", 3)]
+
+def summarize(run, blocks):
+    """The table's row of one run: each quantity's mean and standard error."""
+    row = {"integrator": NAMES[run["kind"]], "step (fs)": run["step"], "ms/step": run["ms"]}
+    for key, _, _ in QUANTITIES:
+        if key == "peak":
+            # The peak of each block's mean g(r) (a single frame's g is too noisy for its maximum).
+            n = len(run["g"])//blocks*blocks
+            blockCurves = run["g"][:n].reshape(blocks, -1, run["g"].shape[1]).mean(axis=1)
+            heights = firstPeak(run["radii"], blockCurves)[0]
+            row[key] = (heights.mean(), heights.std(ddof=1)/np.sqrt(blocks))
+        else:
+            row[key] = blockMean(run["data"][key], blocks)
+    row["peak position"] = firstPeak(run["radii"], run["g"].mean(axis=0))[1]
+    return row
+
+
+def tabulate(runs, blocks):
+    """Print the table and the differences between the integrators; returns the rows."""
     rows = []
     for run in runs:
-        row = {"integrator": names[run["kind"]], "step (fs)": run["step"], "ms/step": run["ms"]}
-        for key, _, _ in quantities:
-            if key == "peak":
-                # The peak of each block's mean g(r) (a single frame's g is too noisy for its maximum).
-                n = len(run["g"])//blocks*blocks
-                blockCurves = run["g"][:n].reshape(blocks, -1, run["g"].shape[1]).mean(axis=1)
-                heights = firstPeak(run["radii"], blockCurves)[0]
-                row[key] = (heights.mean(), heights.std(ddof=1)/np.sqrt(blocks))
-            else:
-                row[key] = blockMean(run["data"][key], blocks)
-        row["peak position"] = firstPeak(run["radii"], run["g"].mean(axis=0))[1]
-        run["row"] = row
-        rows.append(row)
-    say()
-    header = f"{'integrator':<38}{'step':>5}" + "".join(f"{title:>22}" for _, title, _ in quantities) + f"{'ms/step':>9}"
-    say(header)
+        run["row"] = summarize(run, blocks)
+        rows.append(run["row"])
+    say(f"{'integrator':<38}{'step':>5}" + "".join(f"{title:>22}" for _, title, _ in QUANTITIES) + f"{'ms/step':>9}")
     for row in rows:
-        cells = "".join(f"{row[key][0]:>{13}.{digits}f} +- {row[key][1]:<5.{digits}f}" for key, _, digits in quantities)
+        cells = "".join(f"{row[key][0]:>{13}.{digits}f} +- {row[key][1]:<5.{digits}f}" for key, _, digits in QUANTITIES)
         say(f"{row['integrator']:<38}{row['step (fs)']:>3} fs{cells}{row['ms/step']:>9.2f}")
     say()
     say("difference rigid - stock at the same step, in units of the combined standard error:")
     for stepFs in (2, 4):
         rigid, stock = [r["row"] for r in runs if r["step"] == stepFs]
         parts = []
-        for key, title, digits in quantities:
+        for key, title, digits in QUANTITIES:
             difference = rigid[key][0] - stock[key][0]
             error = np.hypot(rigid[key][1], stock[key][1])
             parts.append(f"{title.split(' (')[0]} {difference:+.{digits}f} ({difference/error:+.1f} sigma)")
         say(f"  {stepFs} fs: " + "; ".join(parts))
     for run in runs:
-        say(f"  first g_OO peak of {names[run['kind']]} at {run['step']} fs: r = {run['row']['peak position']:.3f} nm")
+        say(f"  first g_OO peak of {NAMES[run['kind']]} at {run['step']} fs: r = {run['row']['peak position']:.3f} nm")
+    return rows
 
-    with open(RESULTS/"thermostat_comparison.csv", "w", newline="") as handle:
-        writer = csv.writer(handle)
-        writer.writerow(["integrator", "step_fs", "ms_per_step"] + [f"{key}{suffix}" for key, _, _ in quantities
-                                                                    for suffix in ("", "_error")])
-        for row in rows:
-            writer.writerow([row["integrator"], row["step (fs)"], f"{row['ms/step']:.3f}"] +
-                            [f"{value:.6g}" for key, _, _ in quantities for value in row[key]])
 
-    # The plot: g_OO of the four runs, and rigid - stock with 2-sigma bands.
+def plot(runs, blocks, title, path):
+    """g_OO of the four runs, and rigid - stock with 2-sigma bands."""
+    plt = pyplot()
     figure, (top, bottom) = plt.subplots(2, 1, figsize=(7, 7), sharex=True, gridspec_kw={"height_ratios": [2, 1]})
     colours = {2: "tab:blue", 4: "tab:red"}
     for run in runs:
         mean, _ = blockMean(run["g"], blocks)
         top.plot(run["radii"], mean, color=colours[run["step"]], linestyle="-" if run["kind"] == "rigid" else "--",
-                 label=f"{names[run['kind']]}, {run['step']} fs")
+                 label=f"{NAMES[run['kind']]}, {run['step']} fs")
     for stepFs in (2, 4):
         rigid, stock = [blockMean(r["g"], blocks) for r in runs if r["step"] == stepFs]
         difference, error = rigid[0] - stock[0], np.hypot(rigid[1], stock[1])
@@ -307,17 +260,42 @@ def main():
         bottom.plot(radii, difference, color=colours[stepFs], label=f"{stepFs} fs")
         bottom.fill_between(radii, -2*error, 2*error, color=colours[stepFs], alpha=0.15)
     top.set_ylabel("g_OO(r)")
-    top.set_title(f"TIP4P-Ew, {molecules.count} waters, NPT 300 K / 1 bar, friction 1/ps, {production:g} ps per run")
+    top.set_title(title)
     top.legend(fontsize=8)
     bottom.axhline(0, color="black", linewidth=0.5)
     bottom.set_xlabel("r (nm)")
     bottom.set_ylabel("rigid - stock (band: 2 sigma)")
     bottom.legend(fontsize=8)
     bottom.set_xlim(0.2, RDF_MAX)
-    figure.tight_layout()
-    figure.savefig(RESULTS/"thermostat_comparison.png", dpi=120)
+    saveFigure(figure, path)
+
+
+def main():
+    args = parseArguments()
+    openLog(RESULTS/"thermostat_comparison.log")
+    platform = openmm.Platform.getPlatformByName(args.platform)
+    properties = cpuProperties(platform, args.threads)
+    threads = args.threads or (platform.getPropertyDefaultValue("Threads") if args.platform == "CPU" else None)
+    document = ResultsDocument("thermostat_comparison", "Constant temperature and pressure: RigidBodyLangevinIntegrator "
+                               "and LangevinMiddleIntegrator + SETTLE", quick=args.quick, platform=args.platform,
+                               threads=threads, about="Method: the docstring of `benchmarks/thermostat_comparison.py`.")
+    for line in header(args.platform, threads):
+        say(line)
+    started = time.perf_counter()
+    molecules, runs = runAll(args, platform, properties)
     say()
-    say(f"wrote {RESULTS/'thermostat_comparison.png'}, .csv and .log; total {time.perf_counter() - started:.0f} s")
+    with document.capture():
+        rows = tabulate(runs, args.blocks)
+    writeCsv(RESULTS/"thermostat_comparison.csv",
+             [{"integrator": row["integrator"], "step_fs": row["step (fs)"], "ms_per_step": row["ms/step"],
+               **{f"{key}{suffix}": float(value) for key, _, _ in QUANTITIES
+                  for suffix, value in zip(("", "_error"), row[key])}} for row in rows])
+    figure = document.figurePath("thermostat_comparison.png")
+    plot(runs, args.blocks, f"TIP4P-Ew, {molecules.count} waters, NPT 300 K / 1 bar, friction 1/ps, "
+         f"{args.production:g} ps per run", figure)
+    document.figure(figure, "g_OO of the four runs")
+    document.write()
+    say(f"total {time.perf_counter() - started:.0f} s")
 
 
 if __name__ == "__main__":

@@ -21,41 +21,38 @@ integrator's own kinetic-energy split, or for the stock integrator from the mole
 velocities), and the potential energy per molecule. Errors: standard errors of 20 block means.
 
     python benchmarks/thermostat_temperature.py              # 20 ps per run: about 10 minutes on 2 cores
-    python benchmarks/thermostat_temperature.py --time 4     # a quick look
+    python benchmarks/thermostat_temperature.py --quick      # 1 and 4 fs, 1 ps per run: a smoke check
 
-Writes benchmarks/results/thermostat_temperature.csv and .log.
+Writes docs/results/thermostat_temperature.md (a quick run: benchmarks/results/), and
+benchmarks/results/thermostat_temperature.csv and .log.
 """
 
 import argparse
-import csv
-import math
 import time
-from pathlib import Path
 
 import numpy as np
 import openmm
 from openmm import app, unit
 
 import openmmrigid
-from reporting import openLog, say, stamp
+from benchmarking import (RESULTS, ResultsDocument, blockMean, cpuProperties, molecularKineticEnergies, openLog, say, stamp,
+                          writeCsv)
 
-RESULTS = Path(__file__).resolve().parent / "results"
 TEMPERATURE = 300.0
 BOLTZMANN = unit.MOLAR_GAS_CONSTANT_R.value_in_unit(unit.kilojoule_per_mole/unit.kelvin)
 KINDS = ["bussi", "rigid-langevin", "langevin-middle"]
+BLOCKS = 20
 
 
-def equilibratedBox(edge):
+def equilibratedBox(edge, platform, properties):
     """The water box, its System and an equilibrated State (LangevinMiddleIntegrator + SETTLE, 2 fs, 10 ps)."""
-    forceField = app.ForceField("amber14/tip3p.xml")
-    modeller = app.Modeller(app.Topology(), [])
-    modeller.addSolvent(forceField, model="tip3p", boxSize=openmm.Vec3(edge, edge, edge)*unit.nanometer)
-    system = forceField.createSystem(modeller.topology, nonbondedMethod=app.CutoffPeriodic, nonbondedCutoff=0.6*unit.nanometer,
-                                     rigidWater=True, removeCMMotion=False)
+    topology, positions, system = openmmrigid.testing.waterBox(
+        "tip3p", edge=edge, forceField="amber14/tip3p.xml", nonbondedMethod=app.CutoffPeriodic,
+        nonbondedCutoff=0.6*unit.nanometer, removeCMMotion=False)
     integrator = openmm.LangevinMiddleIntegrator(TEMPERATURE*unit.kelvin, 10/unit.picosecond, 2*unit.femtoseconds)
     integrator.setRandomNumberSeed(7)
-    context = openmm.Context(system, integrator, openmm.Platform.getPlatformByName("CPU"))
-    context.setPositions(modeller.positions)
+    context = openmm.Context(system, integrator, platform, properties)
+    context.setPositions(positions)
     openmm.LocalEnergyMinimizer.minimize(context, 10.0, 500)
     context.setVelocitiesToTemperature(TEMPERATURE*unit.kelvin, 7)
     integrator.step(5000)
@@ -81,31 +78,20 @@ def kineticParts(context, integrator, masses, molecules):
     if hasattr(integrator, "getTranslationalKineticEnergy"):
         return (integrator.getTranslationalKineticEnergy().value_in_unit(unit.kilojoule_per_mole),
                 integrator.getRotationalKineticEnergy().value_in_unit(unit.kilojoule_per_mole))
-    v = context.getState(getVelocities=True).getVelocities(asNumpy=True).value_in_unit(unit.nanometer/unit.picosecond)
-    m = masses[molecules]                       # (N, 3)
-    vm = v[molecules]                           # (N, 3, 3)
-    centre = np.einsum("na,nak->nk", m, vm)/m.sum(axis=1)[:, None]
-    translational = 0.5*np.sum(m.sum(axis=1)*np.sum(centre**2, axis=1))
-    total = 0.5*np.sum(m[:, :, None]*vm**2)
-    return translational, total - translational
+    velocities = context.getState(getVelocities=True).getVelocities(asNumpy=True)
+    return molecularKineticEnergies(velocities.value_in_unit(unit.nanometer/unit.picosecond), masses, molecules)
 
 
-def blockMean(values, blocks=20):
-    values = np.asarray(values)
-    means = values[:len(values)//blocks*blocks].reshape(blocks, -1).mean(axis=1)
-    return values.mean(), means.std(ddof=1)/math.sqrt(blocks)
-
-
-def run(system, state, kind, stepFs, production, masses, molecules):
+def run(system, state, kind, stepFs, production, masses, molecules, platform, properties):
     integrator = makeIntegrator(kind, stepFs, seed=11)
-    context = openmm.Context(system, integrator, openmm.Platform.getPlatformByName("CPU"))
+    context = openmm.Context(system, integrator, platform, properties)
     context.setState(state)
     steps = lambda ps: int(round(ps*1000/stepFs))
     numWaters = len(molecules)
     dof = 6*numWaters
     samples = {"reported": [], "translational": [], "rotational": [], "potential": []}
     try:
-        integrator.step(steps(2.0))
+        integrator.step(steps(min(2.0, production)))
         for _ in range(max(20, steps(production)//4)):
             integrator.step(4)
             energy = context.getState(getEnergy=True)
@@ -119,36 +105,29 @@ def run(system, state, kind, stepFs, production, masses, molecules):
         return None, str(error).splitlines()[0][:80]
     if not all(np.all(np.isfinite(values)) for values in samples.values()):
         return None, "NaN"
-    return {name: blockMean(values) for name, values in samples.items()}, ""
+    return {name: blockMean(values, BLOCKS) for name, values in samples.items()}, ""
 
 
-def main():
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--steps", type=float, nargs="+", default=[1, 2, 4, 6, 8], help="step sizes in fs")
-    parser.add_argument("--time", type=float, default=20.0, help="sampled ps per run (default 20)")
+def parseArguments():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--steps", type=float, nargs="+", help="step sizes in fs (default 1 2 4 6 8; quick 1 4)")
+    parser.add_argument("--time", type=float, help="sampled ps per run (default 20; quick 1)")
     parser.add_argument("--edge", type=float, default=1.5, help="box edge in nm (default 1.5: about 100 waters)")
+    parser.add_argument("--quick", action="store_true", help="a smoke check: 1 and 4 fs, 1 ps per run")
+    parser.add_argument("--platform", default="CPU")
+    parser.add_argument("--threads", type=int, help="CPU platform threads (default: the platform's)")
     args = parser.parse_args()
-    RESULTS.mkdir(exist_ok=True)
-    openLog(RESULTS/"thermostat_temperature.log")
-    started = time.time()
-    stamp("building and equilibrating the water box (LangevinMiddleIntegrator + SETTLE, 10 ps)")
-    system, state = equilibratedBox(args.edge)
-    masses = np.array([system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles())])
-    molecules = np.arange(system.getNumParticles()).reshape(-1, 3)
-    stamp(f"{len(molecules)} waters; {args.time:g} ps per run after 2 ps of its own equilibration")
-    rows = []
-    for stepFs in args.steps:
-        for kind in KINDS:
-            stamp(f"{kind} at {stepFs:g} fs")
-            result, failure = run(system, state, kind, stepFs, args.time, masses, molecules)
-            rows.append((kind, stepFs, result, failure))
-    say()
-    say(f"Temperatures (K) and potential energy per molecule (kJ/mol), {len(molecules)} TIP3P waters, 300 K, "
-        f"{args.time:g} ps per run; +- one standard error of 20 block means")
-    say(f"{'integrator':16s} {'step':>5s} {'T reported':>15s} {'T trans':>15s} {'T rot':>15s} {'U/molecule':>17s}")
-    with open(RESULTS/"thermostat_temperature.csv", "w", newline="") as handle:
-        writer = csv.writer(handle)
-        writer.writerow(["integrator", "step_fs", "quantity", "mean", "error"])
+    args.steps = args.steps or ([1, 4] if args.quick else [1, 2, 4, 6, 8])
+    args.time = args.time or (1.0 if args.quick else 20.0)
+    return args
+
+
+def tabulate(rows, waters, args, document):
+    """The table, printed and put in the results document; the CSV."""
+    with document.capture():
+        say(f"Temperatures (K) and potential energy per molecule (kJ/mol), {waters} TIP3P waters, 300 K, "
+            f"{args.time:g} ps per run; +- one standard error of {BLOCKS} block means")
+        say(f"{'integrator':16s} {'step':>5s} {'T reported':>15s} {'T trans':>15s} {'T rot':>15s} {'U/molecule':>17s}")
         for kind, stepFs, result, failure in rows:
             if result is None:
                 say(f"{kind:16s} {stepFs:4g}  failed: {failure}")
@@ -156,10 +135,35 @@ def main():
             cells = [f"{result[q][0]:7.1f} +- {result[q][1]:4.1f}" for q in ("reported", "translational", "rotational")]
             say(f"{kind:16s} {stepFs:4g}  {cells[0]:>15s} {cells[1]:>15s} {cells[2]:>15s} "
                 f"{result['potential'][0]:8.3f} +- {result['potential'][1]:5.3f}")
-            for quantity, (mean, error) in result.items():
-                writer.writerow([kind, stepFs, quantity, f"{mean:.6g}", f"{error:.3g}"])
+    writeCsv(RESULTS/"thermostat_temperature.csv",
+             [dict(integrator=kind, step_fs=stepFs, quantity=quantity, mean=float(mean), error=float(error))
+              for kind, stepFs, result, _ in rows if result is not None for quantity, (mean, error) in result.items()])
+
+
+def main():
+    args = parseArguments()
+    openLog(RESULTS/"thermostat_temperature.log")
+    platform = openmm.Platform.getPlatformByName(args.platform)
+    properties = cpuProperties(platform, args.threads)
+    document = ResultsDocument("thermostat_temperature", "Which temperature each thermostat reads, against the step",
+                               quick=args.quick, platform=args.platform, threads=args.threads,
+                               about="Method: the docstring of `benchmarks/thermostat_temperature.py`.")
+    started = time.time()
+    stamp("building and equilibrating the water box (LangevinMiddleIntegrator + SETTLE, 10 ps)")
+    system, state = equilibratedBox(args.edge, platform, properties)
+    masses = np.array([system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles())])
+    molecules = np.arange(system.getNumParticles()).reshape(-1, 3)
+    stamp(f"{len(molecules)} waters; {args.time:g} ps per run after {min(2.0, args.time):g} ps of its own equilibration")
+    rows = []
+    for stepFs in args.steps:
+        for kind in KINDS:
+            stamp(f"{kind} at {stepFs:g} fs")
+            result, failure = run(system, state, kind, stepFs, args.time, masses, molecules, platform, properties)
+            rows.append((kind, stepFs, result, failure))
     say()
-    say(f"wrote {RESULTS/'thermostat_temperature.csv'}; total {time.time() - started:.0f} s")
+    tabulate(rows, len(molecules), args, document)
+    document.write()
+    say(f"total {time.time() - started:.0f} s")
 
 
 if __name__ == "__main__":

@@ -27,24 +27,19 @@ The default settings take about a minute on two cores.
 
 import argparse
 import dataclasses
-import sys
 import time
-from pathlib import Path
 
 import numpy as np
 import openmm
 from openmm import unit
 
 import openmmrigid
-
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from explicit_bodies import (RigidMolecule, bodyKinds, boxEdge, buildBox, compress,  # noqa: E402
-                             equilibrateRunAndReport)
+from openmmrigid import testing
 
 KILOJOULES_PER_KILOCALORIE = 4.184
 RING, CARBON_HYDROGEN = 0.140, 0.108  # nm: C-C (the ring's radius) and C-H
 _ANGLES = np.radians(60.0*np.arange(6))
-OPLS_BENZENE = RigidMolecule(
+OPLS_BENZENE = testing.RigidMolecule(
     name="benzene", masses=[12.011]*6 + [1.008]*6,
     coordinates=[[r*np.cos(a), r*np.sin(a), 0.0] for r in (RING, RING + CARBON_HYDROGEN) for a in _ANGLES],
     charges=[-0.115]*6 + [0.115]*6, sigmas=[0.355]*6 + [0.242]*6,
@@ -72,23 +67,36 @@ def main():
 
     # Packed at random at half the density (random packing jams near 0.8 g/cm^3), then compressed.
     molecule = dataclasses.replace(OPLS_BENZENE, combining=args.combining)
-    system, positions, bodies = buildBox(molecule, args.molecules, PACKING_DENSITY, args.seed)
+    system, positions, bodies = testing.rigidMoleculeBox(molecule, args.molecules, PACKING_DENSITY, args.seed)
     integrator = openmmrigid.RigidBodyIntegrator(args.step*unit.femtosecond, bodies)
     integrator.setRotationMethod(getattr(openmmrigid.RigidBodyIntegrator, args.method))
     context = openmm.Context(system, integrator, openmm.Platform.getPlatformByName(args.platform))
     context.setPositions(positions)
-    edge = boxEdge(OPLS_BENZENE, args.molecules, args.density)
+    edge = testing.boxEdge(OPLS_BENZENE, args.molecules, args.density)
     dof = integrator.getNumDegreesOfFreedom()
     moments = integrator.getBodyMoments(0).value_in_unit(unit.amu*unit.nanometer**2)
     print(f"{args.molecules} OPLS-AA benzene molecules ({args.combining} combining), {args.density:g} g/cm^3 "
           f"(box {edge:.3f} nm), {args.temperature:g} K, platform {args.platform}")
-    print(f"bodies: {integrator.getNumBodies()}, kinds {bodyKinds(integrator)} (getBodyKind(0) = "
+    print(f"bodies: {integrator.getNumBodies()}, kinds {testing.bodyKinds(integrator)} (getBodyKind(0) = "
           f"{integrator.getBodyKind(0)!r}); moments {np.round(moments, 5).tolist()} amu nm^2 "
           f"(I3/(I1 + I2) = {moments[2]/(moments[0] + moments[1]):.12f}); {dof} degrees of freedom")
 
-    stages = compress(context, integrator, bodies, edge, args.temperature, picosecondsPerStage=0.1, seed=args.seed)
-    equilibrateRunAndReport(context, integrator, args, dof, bodies, positions, 3,
-                            history=f"compression from {PACKING_DENSITY:g} g/cm^3 ({stages} stages of 0.1 ps) and ")
+    stages = testing.compressBox(context, integrator, bodies, edge, args.temperature, picosecondsPerStage=0.1,
+                                 seed=args.seed)
+    testing.equilibrateByRedraws(context, integrator, args.temperature, args.equilibrate, seed=args.seed)
+    steps = int(round(args.time/(args.step*1e-3)))
+    run = testing.sampleNVE(context, integrator, steps, max(1, steps//500))
+    drift, fluctuation = testing.energyDrift(run.times, run.energies, dof)
+    temperatures = testing.rigidTemperatures(run, args.molecules, 3)
+    change, extents = testing.shapeDeviations(context, bodies, positions)
+    print(f"\nNVE, {args.method} rotation, {args.time:g} ps at {args.step:g} fs ({steps} steps, "
+          f"{run.secondsPerStep*1e3:.2f} ms/step) after compression from {PACKING_DENSITY:g} g/cm^3 "
+          f"({stages} stages of 0.1 ps) and {args.equilibrate:g} ps of equilibration:")
+    print(f"  energy drift {drift:+.4f} kJ/mol/ns/dof, fluctuation {fluctuation:.3f} kJ/mol")
+    for name, (mean, error) in zip(("translational", "rotational", "rotational - translational"), temperatures):
+        print(f"  {name} temperature {mean:.1f} +- {error:.1f} K")
+    print(f"  rigidity: largest change of an intramolecular distance {change:.1e} nm; largest distance of a "
+          f"molecule's atoms from its best-fit plane (RMS) {extents[:, 2].max():.1e} nm")
     print(f"total {time.perf_counter() - started:.0f} s")
 
 

@@ -24,21 +24,18 @@ The default settings take under a minute on two cores.
 """
 
 import argparse
-import sys
 import time
-from pathlib import Path
 
 import numpy as np
 import openmm
 from openmm import unit
 
 import openmmrigid
+from openmmrigid import testing
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from explicit_bodies import (BOLTZMANN, RigidMolecule, bodyKinds, buildBox, equilibrateRunAndReport)  # noqa: E402
-
+BOLTZMANN = testing.MOLAR_GAS_CONSTANT  # kJ/mol/K: TraPPE gives epsilon/k in K
 CARBON_OXYGEN = 0.116  # nm
-TRAPPE_CO2 = RigidMolecule(
+TRAPPE_CO2 = testing.RigidMolecule(
     name="CO2", masses=[12.011, 15.999, 15.999],
     coordinates=[[0, 0, 0], [0, 0, CARBON_OXYGEN], [0, 0, -CARBON_OXYGEN]],
     charges=[0.70, -0.35, -0.35], sigmas=[0.280, 0.305, 0.305],
@@ -59,7 +56,7 @@ def main():
     args = parser.parse_args()
     started = time.perf_counter()
 
-    system, positions, bodies = buildBox(TRAPPE_CO2, args.molecules, args.density, args.seed)
+    system, positions, bodies = testing.rigidMoleculeBox(TRAPPE_CO2, args.molecules, args.density, args.seed)
     integrator = openmmrigid.RigidBodyIntegrator(args.step*unit.femtosecond, bodies)
     integrator.setRotationMethod(getattr(openmmrigid.RigidBodyIntegrator, args.method))
     context = openmm.Context(system, integrator, openmm.Platform.getPlatformByName(args.platform))
@@ -69,11 +66,24 @@ def main():
     moments = integrator.getBodyMoments(0).value_in_unit(unit.amu*unit.nanometer**2)
     print(f"{args.molecules} TraPPE CO2 molecules, {args.density:g} g/cm^3 (box {edge:.3f} nm), {args.temperature:g} K, "
           f"platform {args.platform}")
-    print(f"bodies: {integrator.getNumBodies()}, kinds {bodyKinds(integrator)}, moments "
+    print(f"bodies: {integrator.getNumBodies()}, kinds {testing.bodyKinds(integrator)}, moments "
           f"{np.round(moments, 5).tolist()} amu nm^2; {dof} degrees of freedom "
           f"(3 + 2 per body)")
 
-    equilibrateRunAndReport(context, integrator, args, dof, bodies, positions, 2)
+    testing.equilibrateByRedraws(context, integrator, args.temperature, args.equilibrate, seed=args.seed)
+    steps = int(round(args.time/(args.step*1e-3)))
+    run = testing.sampleNVE(context, integrator, steps, max(1, steps//500))
+    drift, fluctuation = testing.energyDrift(run.times, run.energies, dof)
+    (translational, translationalError), (rotational, rotationalError), (excess, excessError) = \
+        testing.rigidTemperatures(run, args.molecules, 2)
+    change, extents = testing.shapeDeviations(context, bodies, positions)
+    print(f"\nNVE, {args.method} rotation, {args.time:g} ps at {args.step:g} fs ({steps} steps, "
+          f"{run.secondsPerStep*1e3:.2f} ms/step) after {args.equilibrate:g} ps of equilibration:")
+    print(f"  energy drift {drift:+.4f} kJ/mol/ns/dof, fluctuation {fluctuation:.3f} kJ/mol")
+    print(f"  temperature: translational {translational:.1f} +- {translationalError:.1f} K, rotational "
+          f"{rotational:.1f} +- {rotationalError:.1f} K (2 per molecule); difference {excess:+.1f} +- {excessError:.1f} K")
+    print(f"  rigidity: largest change of a C-O or O-O distance {change:.1e} nm; largest distance of a molecule's "
+          f"atoms from its axis (RMS) {extents[:, 1].max():.1e} nm")
     print(f"total {time.perf_counter() - started:.0f} s")
 
 

@@ -26,24 +26,6 @@ from openmm import app, unit
 import openmmrigid
 
 
-def buildWater(molecules, model):
-    """A cubic box of about `molecules` waters of the given model ("tip4pew", "tip3p", "spce")."""
-    forceField = app.ForceField(f"{model}.xml")
-    modeller = app.Modeller(app.Topology(), [])
-    edge = (molecules/33.4)**(1/3)  # liquid water holds about 33.4 molecules per nm^3
-    modeller.addSolvent(forceField, model=model, boxSize=openmm.Vec3(edge, edge, edge)*unit.nanometer)
-    system = forceField.createSystem(modeller.topology, nonbondedMethod=app.PME, nonbondedCutoff=min(0.9, 0.45*edge)*unit.nanometer,
-                                     constraints=app.HBonds, rigidWater=True, ewaldErrorTolerance=5e-4)
-    return modeller, system
-
-
-def degreesOfFreedom(system):
-    """3 per massive particle, less one per constraint and 3 more with a CMMotionRemover (as OpenMM counts them)."""
-    massive = sum(1 for i in range(system.getNumParticles()) if system.getParticleMass(i) > 0*unit.dalton)
-    remover = any(isinstance(force, openmm.CMMotionRemover) for force in system.getForces())
-    return 3*massive - system.getNumConstraints() - (3 if remover else 0)
-
-
 class Run:
     """One integrator in its own Context, from `state`: times (ps), total energies (kJ/mol), seconds in step()."""
 
@@ -79,12 +61,6 @@ def runInterleaved(runs, steps, sampleEvery):
             print(f"  ... {(number + 1)*sampleEvery} of {steps} steps", flush=True)
 
 
-def summarize(times, energies, dof):
-    slope, intercept = np.polyfit(times, energies, 1)
-    fluctuation = np.std(energies - (slope*times + intercept))
-    return slope*1000/dof, fluctuation
-
-
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--molecules", type=int, default=500, help="approximate number of waters (default 500)")
@@ -98,15 +74,17 @@ def main():
     platform = openmm.Platform.getPlatformByName(args.platform)
     started = time.perf_counter()
     print(f"building a box of about {args.molecules} {args.model.upper()} waters with openmm.app ...", flush=True)
-    modeller, system = buildWater(args.molecules, args.model)
-    waters = modeller.topology.getNumResidues()
+    topology, positions, system = openmmrigid.testing.waterBox(
+        args.model, edge=(args.molecules/openmmrigid.testing.WATERS_PER_CUBIC_NANOMETRE)**(1/3),
+        constraints=app.HBonds)
+    waters = topology.getNumResidues()
     print(f"{waters} {args.model.upper()} waters, {system.getNumParticles()} particles, PME, platform {args.platform}")
 
     print(f"minimizing, then equilibrating {args.equilibrate:g} ps with stock LangevinMiddleIntegrator at 300 K ...",
           flush=True)
     equilibration = openmm.LangevinMiddleIntegrator(300*unit.kelvin, 1/unit.picosecond, 2*unit.femtosecond)
     context = openmm.Context(system, equilibration, platform)
-    context.setPositions(modeller.positions)
+    context.setPositions(positions)
     openmm.LocalEnergyMinimizer.minimize(context, 10, 200)
     context.setVelocitiesToTemperature(300*unit.kelvin, 1)
     equilibration.step(int(args.equilibrate*500))
@@ -118,7 +96,7 @@ def main():
     steps = int(round(args.time/(args.step/1000)))
     sampleEvery = max(1, steps//200)
     steps -= steps % sampleEvery
-    dof = degreesOfFreedom(system)
+    dof = openmmrigid.testing.degreesOfFreedom(system)
     stock = openmm.VerletIntegrator(dt)
     stock.setConstraintTolerance(1e-10)
     runs = [Run("stock VerletIntegrator + SETTLE", system, state, stock, platform)]
@@ -140,7 +118,7 @@ def main():
         if not np.all(np.isfinite(energies)):
             print(f"{run.name:<34}{'unstable (NaN)':>30}")
             continue
-        drift, fluctuation = summarize(np.array(run.times), energies, dof)
+        drift, fluctuation = openmmrigid.testing.energyDrift(run.times, energies, dof)
         msPerStep = 1000*sum(run.roundSeconds)/steps
         ratio = np.median(np.array(run.roundSeconds)/stockSeconds)
         print(f"{run.name:<34}{drift:>+17.4f}{fluctuation:>13.3f}{msPerStep:>9.2f}{ratio:>14.3f}")

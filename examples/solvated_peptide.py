@@ -21,19 +21,14 @@ The default settings take about a minute and a half on two busy cores.
 
 import argparse
 import io
-import sys
 import time
-from pathlib import Path
 
 import numpy as np
 import openmm
 from openmm import app, unit
 
 import openmmrigid
-
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from explicit_bodies import energyConservation, runNVE  # noqa: E402
-from rigid_water import degreesOfFreedom  # noqa: E402
+from openmmrigid import testing
 
 # Heavy atoms of Ace-Ala-Nme from internal coordinates: label, residue, atom name, element, the
 # labels of the atoms it is bonded to / makes its angle with / its torsion with, the bond length (nm),
@@ -91,25 +86,26 @@ def alanineDipeptidePdb():
     return "\n".join(lines + ["TER", "END"]) + "\n"
 
 
-def buildSolvatedPeptide(edge):
+def buildSolvatedPeptide(edge, platform):
     """Topology, positions and System of alanine dipeptide in TIP4P-Ew water, and the peptide's atom indices."""
     forceField = app.ForceField("amber14-all.xml", "amber14/tip4pew.xml")
     peptide = app.PDBFile(io.StringIO(alanineDipeptidePdb()))
     modeller = app.Modeller(peptide.topology, peptide.positions)
-    modeller.addHydrogens(forceField)
+    # addHydrogens minimizes the hydrogens on the platform given (by default the fastest one there is,
+    # which may be a GPU platform whose minimizer fails, as OpenCL's on PoCL does).
+    modeller.addHydrogens(forceField, platform=platform)
     solute = list(range(modeller.topology.getNumAtoms()))  # the peptide comes first, the waters after it
-    modeller.addSolvent(forceField, model="tip4pew", boxSize=openmm.Vec3(edge, edge, edge)*unit.nanometer)
-    system = forceField.createSystem(modeller.topology, nonbondedMethod=app.PME, nonbondedCutoff=0.9*unit.nanometer,
-                                     constraints=app.HBonds, rigidWater=True, ewaldErrorTolerance=5e-4)
-    return modeller, system, solute
+    topology, positions, system = testing.waterBox("tip4pew", edge=edge, forceField=forceField, solute=modeller,
+                                                   constraints=app.HBonds)
+    return topology, positions, system, solute
 
 
-def equilibratedState(modeller, system, platform, picoseconds):
+def equilibratedState(positions, system, platform, picoseconds):
     """Minimized, then stock Langevin dynamics at 300 K (2 fs) for `picoseconds`."""
     integrator = openmm.LangevinMiddleIntegrator(300*unit.kelvin, 1/unit.picosecond, 2*unit.femtosecond)
     integrator.setRandomNumberSeed(1991)
     context = openmm.Context(system, integrator, platform)
-    context.setPositions(modeller.positions)
+    context.setPositions(positions)
     openmm.LocalEnergyMinimizer.minimize(context, 10, 200)
     context.setVelocitiesToTemperature(300*unit.kelvin, 1991)
     integrator.step(int(round(picoseconds/0.002)))
@@ -150,12 +146,12 @@ def main():
     started = time.perf_counter()
 
     platform = openmm.Platform.getPlatformByName(args.platform)
-    modeller, system, solute = buildSolvatedPeptide(args.box)
-    waters = modeller.topology.getNumResidues() - 3
+    topology, positions, system, solute = buildSolvatedPeptide(args.box, platform)
+    waters = topology.getNumResidues() - 3
     soluteConstraints = sum(1 for k in range(system.getNumConstraints()) if system.getConstraintParameters(k)[0] < len(solute))
     print(f"alanine dipeptide ({len(solute)} atoms, {soluteConstraints} constraints on bonds to H) in {waters} TIP4P-Ew "
           f"waters; {system.getNumParticles()} particles, PME, platform {args.platform}")
-    state = equilibratedState(modeller, system, platform, args.equilibrate)
+    state = equilibratedState(positions, system, platform, args.equilibrate)
 
     dt = args.step*unit.femtosecond
     stock = openmm.VerletIntegrator(dt)
@@ -172,8 +168,8 @@ def main():
             bodies, kinds, free, virtual = describeBodies(rigid, system)
             dof = rigid.getNumDegreesOfFreedom()
             print(f"RigidBodyIntegrator: {bodies} rigid bodies ({kinds}), {free} free particles, {virtual} virtual sites; "
-                  f"{dof} degrees of freedom (OpenMM's count for the System: {degreesOfFreedom(system)})")
-        run = runNVE(context, integrator, steps, max(1, steps//200))
+                  f"{dof} degrees of freedom (OpenMM's count for the System: {testing.degreesOfFreedom(system)})")
+        run = testing.sampleNVE(context, integrator, steps, max(1, steps//200))
         positions = context.getState(getPositions=True).getPositions(asNumpy=True).value_in_unit(unit.nanometer)
         results.append((name, run, *constraintViolations(system, positions, solute)))
         del context
@@ -186,7 +182,7 @@ def main():
         if not np.all(np.isfinite(run.energies)):
             print(f"{name:<34}{'unstable (NaN)':>14}")
             continue
-        drift, fluctuation = energyConservation(run, dof)
+        drift, fluctuation = testing.energyDrift(run.times, run.energies, dof)
         print(f"{name:<34}{drift:>+14.4f}{fluctuation:>13.3f}{soluteViolation:>20.1e}{waterViolation:>16.1e}"
               f"{run.secondsPerStep*1e3:>9.2f}")
     print("drift: slope of a linear fit of the total energy per degree of freedom; fluctuation: standard deviation "

@@ -30,7 +30,8 @@ deserializeIntegrator
 FreeRotor
     The exact torque-free motion of a single rigid body.
 testing
-    Small systems shipped with the package (``testing.alanineDipeptide()``), for examples and tests.
+    Small systems and measurements shared by the examples and benchmarks (``testing.alanineDipeptide()``,
+    ``testing.waterBox()``, ``testing.energyDrift()``, ...).
 special
     The Jacobi elliptic functions and elliptic integrals that FreeRotor is built on.
 """

@@ -1,0 +1,394 @@
+"""What the benchmarks share: progress and logs, the run's provenance and its results document,
+CSV, plots and the statistics of time series. Systems shared with the examples (water boxes, random
+rotations, energy drift) are in the package, ``openmmrigid.testing``.
+
+Each benchmark is a program ``python benchmarks/<name>.py``; the folder of the script is on Python's
+path then, so ``import benchmarking`` finds this file.
+
+Results documents: a full run writes ``docs/results/<name>.md`` (a quick run
+``benchmarks/results/<name>.md``, which git ignores), opening with the date, commit, machine,
+software and command of the run (``ResultsDocument``); what the benchmark prints while a
+``ResultsDocument.capture()`` is open goes into the document too.
+"""
+
+import contextlib
+import csv
+import datetime
+import hashlib
+import os
+import platform as pyplatform
+import shlex
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import openmm
+
+import openmmrigid
+
+ROOT = Path(__file__).resolve().parent.parent
+RESULTS = ROOT/"benchmarks"/"results"     # logs, CSV and plots of every run (git ignores it)
+DOCUMENTS = ROOT/"docs"/"results"         # the results documents of full runs
+FIGURES = ROOT/"docs"/"figures"           # the figures those documents show
+
+# ---------------------------------------------------------------------------------------------------
+# Progress and the log
+
+_log = None
+_captured = None
+
+
+def openLog(path):
+    """Copy every later say() line to this file (replacing an earlier one)."""
+    global _log
+    closeLog()
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    _log = open(path, "w")
+
+
+def closeLog():
+    global _log
+    if _log is not None:
+        _log.close()
+        _log = None
+
+
+def say(text=""):
+    """Print a line (flushed, so that a long run shows its progress) and copy it to the log file and
+    to an open ResultsDocument.capture()."""
+    print(text, flush=True)
+    if _log is not None:
+        _log.write(text + "\n")
+        _log.flush()
+    if _captured is not None:
+        _captured.extend(text.split("\n"))
+
+
+def stamp(text):
+    """say() with the wall-clock time in front: for progress lines."""
+    say(f"[{datetime.datetime.now():%H:%M:%S}] {text}")
+
+
+class Progress:
+    """A progress bar for one long loop: redrawn in place on a terminal, a line every 20 % otherwise
+    (into the log)."""
+
+    def __init__(self, label, total):
+        self.label, self.total, self.started, self.shown = label, total, time.perf_counter(), -1
+        self.terminal = sys.stdout.isatty()
+
+    def update(self, done):
+        if done <= 0:
+            return
+        fraction = done/self.total
+        elapsed = time.perf_counter() - self.started
+        left = elapsed*(1 - fraction)/fraction
+        bar = "#"*int(20*fraction) + "-"*(20 - int(20*fraction))
+        text = f"  {self.label} [{bar}] {100*fraction:3.0f} %, {elapsed:.0f} s, about {left:.0f} s left"
+        if self.terminal:
+            print("\r" + text, end="\n" if done >= self.total else "", flush=True)
+        elif int(5*fraction) > self.shown:
+            self.shown = int(5*fraction)
+            say(text)
+
+
+# ---------------------------------------------------------------------------------------------------
+# Provenance
+
+def commit():
+    """The source tree's commit (short), marked when tracked files other than results differ from it."""
+    try:
+        head = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True,
+                              text=True, check=True).stdout.strip()
+        # Results documents and figures written by earlier runs do not make the code differ.
+        dirty = subprocess.run(["git", "-C", str(ROOT), "status", "--porcelain", "--untracked-files=no", "--", ".",
+                                ":!docs/results", ":!docs/figures"],
+                               capture_output=True, text=True, check=True).stdout.strip()
+        return head + (" (with uncommitted changes to the code)" if dirty else "")
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+
+
+def processorName():
+    try:
+        for line in subprocess.run(["lscpu"], capture_output=True, text=True, check=True).stdout.splitlines():
+            if line.startswith("Model name:"):
+                return line.split(":", 1)[1].strip()
+    except (OSError, subprocess.CalledProcessError):
+        pass
+    return pyplatform.processor() or pyplatform.machine()
+
+
+def machine():
+    return f"{processorName()}, {pyplatform.machine()}, {os.cpu_count()} cores"
+
+
+def loadAverage():
+    try:
+        return " ".join(Path("/proc/loadavg").read_text().split()[:3])
+    except OSError:
+        return "unknown"
+
+
+def command():
+    """The command line of this run, as a user would type it from the repository root."""
+    script = Path(sys.argv[0]).resolve()
+    try:
+        script = script.relative_to(ROOT)
+    except ValueError:
+        pass
+    return shlex.join(["python", str(script)] + sys.argv[1:])
+
+
+def cpuProperties(platform, threads):
+    """Context properties giving the CPU platform `threads` threads (none for other platforms, or for
+    threads None: the platform's default)."""
+    name = platform if isinstance(platform, str) else platform.getName()
+    return {"Threads": str(threads)} if name == "CPU" and threads else {}
+
+
+def pluginBuild():
+    """When the loaded plugin libraries were built, and a hash of them (the C++ may be rebuilt between runs)."""
+    folder = Path(openmmrigid.__file__).parent
+    digest, newest = hashlib.sha256(), 0.0
+    libraries = sorted(folder.glob("*.so")) + sorted(folder.glob("*.dylib")) + sorted(folder.glob("*.dll"))
+    for library in libraries:
+        digest.update(library.read_bytes())
+        newest = max(newest, library.stat().st_mtime)
+    if not libraries:
+        return "no libraries found"
+    return f"built {datetime.datetime.fromtimestamp(newest):%Y-%m-%d %H:%M}, sha256 {digest.hexdigest()[:12]}"
+
+
+def header(platform=None, threads=None):
+    """The run's provenance, one line each: date, commit, machine, software, platform, load, command."""
+    lines = [f"date: {datetime.datetime.now().astimezone():%Y-%m-%d %H:%M %Z}",
+             f"commit: {commit()}",
+             f"machine: {machine()}",
+             f"software: OpenMM {openmm.version.full_version}, openmm-rigid {openmmrigid.__version__}, "
+             f"Python {pyplatform.python_version()}, numpy {np.__version__}",
+             f"plugin libraries: {pluginBuild()}"]
+    if platform is not None:
+        lines.append(f"platform: {platform}" + (f", {threads} thread(s)" if threads else ""))
+    lines += [f"load average before the run: {loadAverage()} (1, 5, 15 min)", f"command: `{command()}`"]
+    return lines
+
+
+class ResultsDocument:
+    """The Markdown record of one run: a title, the provenance header, then sections of text,
+    tables, figures and captured output; write() puts it in docs/results/<name>.md (full runs) or
+    benchmarks/results/<name>.md (quick runs, not to be mistaken for results)."""
+
+    def __init__(self, name, title, quick=False, platform=None, threads=None, about="", provenance=None):
+        """provenance: the header's lines, for a document assembled from several runs (default: this
+        run's header())."""
+        self.name, self.quick = name, quick
+        self.path = (RESULTS if quick else DOCUMENTS)/f"{name}.md"
+        self.lines = [f"# {title}", "",
+                      f"Written by `benchmarks/{Path(sys.argv[0]).name}`"
+                      f"{' (a --quick smoke run: not a measurement)' if quick else ''}.",
+                      ""]
+        self.lines += [f"- {line}" for line in (provenance or header(platform, threads))] + [""]
+        if about:
+            self.lines += [about, ""]
+
+    def section(self, title, text=""):
+        self.lines += [f"## {title}", ""] + ([text, ""] if text else [])
+
+    def text(self, text):
+        self.lines += [text, ""]
+
+    def table(self, columns, rows):
+        """A Markdown table; numbers right-aligned."""
+        self.lines += markdownTable(columns, rows) + [""]
+
+    def figure(self, path, caption):
+        self.lines += [f"![{caption}]({os.path.relpath(path, self.path.parent)})", ""]
+
+    @contextlib.contextmanager
+    def capture(self):
+        """Put what say() prints inside the block into the document, as preformatted text."""
+        global _captured
+        previous, _captured = _captured, []
+        try:
+            yield
+        finally:
+            lines, _captured = _captured, previous
+            while lines and not lines[0].strip():
+                lines.pop(0)
+            self.lines += ["```"] + [line.rstrip() for line in lines] + ["```", ""]
+
+    def figurePath(self, filename):
+        """Where a figure of this run goes: docs/figures for a full run, benchmarks/results for a quick one."""
+        return (RESULTS if self.quick else FIGURES)/filename
+
+    def write(self):
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self.path.write_text("\n".join(self.lines).rstrip() + "\n")
+        say(f"wrote {self.path.relative_to(ROOT)}")
+        return self.path
+
+
+def markdownTable(columns, rows):
+    """Lines of a Markdown table: columns are headings, rows lists of cells (numbers formatted by
+    the caller); a column whose cells are all numbers is right-aligned."""
+    def numeric(cell):
+        try:
+            float(str(cell).replace("**", "").replace("x", "").split()[0])
+            return True
+        except (ValueError, IndexError):
+            return False
+    align = ["---:" if rows and all(numeric(row[i]) or row[i] in ("", None) for row in rows) else "---"
+             for i in range(len(columns))]
+    return (["| " + " | ".join(columns) + " |", "| " + " | ".join(align) + " |"]
+            + ["| " + " | ".join("" if cell is None else str(cell) for cell in row) + " |" for row in rows])
+
+
+# ---------------------------------------------------------------------------------------------------
+# Files and plots
+
+def writeCsv(path, rows):
+    """Rows (dicts with the same keys) as CSV, floats to 6 significant digits."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "w", newline="") as stream:
+        writer = csv.DictWriter(stream, fieldnames=list(rows[0]))
+        writer.writeheader()
+        for row in rows:
+            writer.writerow({key: (f"{value:.6g}" if isinstance(value, float) else value) for key, value in row.items()})
+    say(f"wrote {path.relative_to(ROOT) if path.is_relative_to(ROOT) else path}")
+
+
+def pyplot():
+    """matplotlib.pyplot with the file-only Agg backend (no display needed)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    return plt
+
+
+def saveFigure(figure, path):
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    figure.tight_layout()
+    figure.savefig(path, dpi=120)
+    pyplot().close(figure)
+    say(f"wrote {path.relative_to(ROOT) if path.is_relative_to(ROOT) else path}")
+
+
+# ---------------------------------------------------------------------------------------------------
+# Statistics of time series
+
+def blockMean(values, blocks=(5, 10)):
+    """Mean of a time series (along the first axis) and its standard error from block means: the
+    largest of the estimates with each number of blocks given (an int: that one), each from the
+    first multiple of that many samples. Block means are nearly independent where a block outlasts
+    the correlation time, so the larger estimate is the safer one."""
+    values = np.asarray(values, dtype=float)
+    errors = []
+    for count in ([blocks] if np.isscalar(blocks) else blocks):
+        n = len(values)//count*count
+        if n < count:
+            continue
+        means = values[:n].reshape(count, -1, *values.shape[1:]).mean(axis=1)
+        errors.append(means.std(axis=0, ddof=1)/np.sqrt(count))
+    error = np.max(errors, axis=0) if errors else np.full(values.shape[1:], np.nan)
+    return values.mean(axis=0), error
+
+
+def molecularKineticEnergies(velocities, masses, molecules):
+    """Translational kinetic energy of the molecules' centres of mass and the rest (kJ/mol): for rigid
+    molecules (velocities that are rigid motion, as constraints or a rigid-body integrator leave them)
+    the rest is the rotational kinetic energy. velocities (particles x 3, nm/ps), masses (particles,
+    amu), molecules (molecules x atoms per molecule: indices of their massive particles)."""
+    m = masses[molecules]                                       # (N, k)
+    v = velocities[molecules]                                   # (N, k, 3)
+    centre = np.einsum("na,nak->nk", m, v)/m.sum(axis=1)[:, None]
+    translational = 0.5*np.sum(m.sum(axis=1)*np.sum(centre**2, axis=1))
+    total = 0.5*np.sum(m[:, :, None]*v**2)
+    return translational, total - translational
+
+
+def slopeError(times, values, blocks=10):
+    """Standard error of the slope of a time series, from the line through the means of `blocks`
+    consecutive blocks (the fit to every sample would understate it for correlated samples)."""
+    n = len(times)//blocks*blocks
+    if n < 2*blocks:
+        return float("nan")
+    t = np.asarray(times)[:n].reshape(blocks, -1).mean(axis=1)
+    e = np.asarray(values)[:n].reshape(blocks, -1).mean(axis=1)
+    slope, intercept = np.polyfit(t, e, 1)
+    residual = e - (slope*t + intercept)
+    return float(np.sqrt(residual @ residual/(blocks - 2)/np.sum((t - t.mean())**2)))
+
+
+def radialDistribution(frames, boxes, largest, width):
+    """g(r) of each frame of positions (frames x atoms x 3, nm) in its rectangular box (frames x 3,
+    the edges, nm), by minimum image, on bins of `width` up to `largest` nm: (bin centres, frames x bins)."""
+    edges = np.arange(0.0, largest + width/2, width)
+    shells = 4/3*np.pi*(edges[1:]**3 - edges[:-1]**3)
+    upper = np.triu_indices(np.shape(frames)[1], k=1)
+    result = []
+    for positions, box in zip(frames, boxes):
+        delta = positions[:, None, :] - positions[None, :, :]
+        delta -= box*np.round(delta/box)
+        counts, _ = np.histogram(np.sqrt(np.sum(delta**2, axis=-1))[upper], bins=edges)
+        n = len(positions)
+        result.append(2*counts/(n*(n/np.prod(box))*shells))
+    return 0.5*(edges[1:] + edges[:-1]), np.array(result)
+
+
+def nsPerDay(stepFs, secondsPerStep):
+    return stepFs*1e-6*86400/secondsPerStep
+
+
+# ---------------------------------------------------------------------------------------------------
+# Timing: integrators side by side
+
+def _secondsPerStep(integrator, target):
+    """A rough cost per step: blocks of 1, 4, 16, ... steps until one takes a tenth of the target
+    (after two untimed steps: a Context's first step also sets things up)."""
+    integrator.step(2)
+    steps = 1
+    while True:
+        start = time.perf_counter()
+        integrator.step(steps)
+        elapsed = time.perf_counter() - start
+        if elapsed >= 0.1*target or steps >= 1 << 16:
+            return elapsed/steps
+        steps *= 4
+
+
+def blockSteps(integrator, fixed, target, minimum):
+    """Steps per timed block: `fixed` if given, else enough for `target` seconds (at least `minimum`)."""
+    if fixed:
+        return fixed
+    return max(minimum, int(round(target/_secondsPerStep(integrator, target))))
+
+
+def timeInterleaved(integrators, steps, repetitions):
+    """Warm up each integrator with one block, then time `repetitions` blocks of `steps` each,
+    interleaved (one block of each in turn, so that all see the same load).
+
+    integrators: {label: integrator}, each bound to its own Context. Returns ({label: [wall s/step]},
+    {label: [CPU s/step]}): the process's CPU time, which other processes on a shared machine stretch
+    less than the wall time.
+    """
+    for integrator in integrators.values():
+        integrator.step(steps)
+    wall, cpu = {label: [] for label in integrators}, {label: [] for label in integrators}
+    for _ in range(repetitions):
+        for label, integrator in integrators.items():
+            startWall, startCpu = time.perf_counter(), time.process_time()
+            integrator.step(steps)
+            wall[label].append((time.perf_counter() - startWall)/steps)
+            cpu[label].append((time.process_time() - startCpu)/steps)
+    return wall, cpu
+
+
+def medianRange(samples, scale=1.0):
+    """(median, min, max) of the samples times `scale`."""
+    values = [scale*value for value in samples]
+    return float(np.median(values)), min(values), max(values)
