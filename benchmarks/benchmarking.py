@@ -392,3 +392,22 @@ def medianRange(samples, scale=1.0):
     """(median, min, max) of the samples times `scale`."""
     values = [scale*value for value in samples]
     return float(np.median(values)), min(values), max(values)
+
+
+def principalKineticEnergies(positions, velocities, masses, molecules):
+    """Translational kinetic energy of rigid molecules' centres of mass and, summed over the
+    molecules, the rotational kinetic energy about each one's principal axes in the order of
+    increasing moment, L_k^2/(2 I_k) (kJ/mol: a float and an array of 3). positions (nm) and
+    velocities (nm/ps) as particles x 3, masses (amu), molecules (molecules x atoms: indices of their
+    massive particles, whole, not wrapped across the box)."""
+    m = masses[molecules][:, :, None]                            # (N, k, 1)
+    x, v = positions[molecules], velocities[molecules]          # (N, k, 3)
+    total = m.sum(axis=1)
+    centre, speed = (m*x).sum(axis=1)/total, (m*v).sum(axis=1)/total
+    r, u = x - centre[:, None], v - speed[:, None]
+    angular = (m*np.cross(r, u)).sum(axis=1)                    # L about the centre of mass
+    inertia = (m[..., None]*(np.einsum("nki,nki->nk", r, r)[..., None, None]*np.eye(3)
+                             - r[..., :, None]*r[..., None, :])).sum(axis=1)
+    moments, axes = np.linalg.eigh(inertia)                     # ascending moments, axes as columns
+    principal = np.einsum("nij,ni->nj", axes, angular)
+    return 0.5*float(np.sum(total[:, 0]*np.sum(speed**2, axis=1))), np.sum(principal**2/(2*moments), axis=0)
