@@ -14,5 +14,5 @@ int main() {
         registerKernelFactories();  // after the CPU platform exists, so that it gets the kernels too
         RigidBodyIntegratorTests::platformProperties["DeterministicForces"] = "true";
         return OpenMM::Platform::getPlatformByName("CPU");
-    });
+    }, RigidBodyIntegratorTests::runPlatformTests);
 }
