@@ -79,6 +79,8 @@ Platform* preparationPlatform = nullptr;
  * for 1e-9, measured the same).
  */
 double constraintSolverAccuracy = 0.0;
+/** The number of 2 fs steps of the water boxes' NVE runs (set by the platform file: longer where they are cheap). */
+int waterSteps = 300;
 
 /** A short message with full precision numbers. */
 template <class... Args>
