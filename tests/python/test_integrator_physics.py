@@ -325,25 +325,6 @@ def test_particle_in_two_bodies(platform=PLATFORM):
     expect_context_error(small_system(), [[0, 1, 2], [2, 3, 4]], platform, 2)
 
 
-def test_massless_particle_in_body(platform=PLATFORM):
-    system = small_system()
-    system.setParticleMass(4, 0.0)
-    expect_context_error(system, [[0, 1, 2], [3, 4, 5]], platform, 4)
-
-
-def test_constraint_between_body_and_free_particle(platform=PLATFORM):
-    system = small_system()
-    system.addConstraint(2, 3, 0.6)
-    expect_context_error(system, [[0, 1, 2]], platform, 2, 3)
-
-
-def test_virtual_site_in_body(platform=PLATFORM):
-    system = small_system()
-    system.setParticleMass(5, 0.0)
-    system.setVirtualSite(5, openmm.TwoParticleAverageSite(3, 4, 0.5, 0.5))
-    expect_context_error(system, [[0, 1, 2], [3, 4, 5]], platform, 5)
-
-
 def test_nan_positions(platform=PLATFORM):
     """NaN coordinates: step() raises naming the particle or its body; valid positions make the
     Context usable again, and it then moves exactly as a fresh one would."""
@@ -369,17 +350,3 @@ def test_nan_positions(platform=PLATFORM):
     positions = systems.positions_of(context)
     assert np.all(np.isfinite(positions))
     assert np.max(np.abs(positions - (SMALL_POSITIONS + 0.1 * velocities))) < 1e-12
-
-
-def test_unknown_rotation_method(platform=PLATFORM):
-    integrator = RigidBodyIntegrator(0.01, [[0, 1, 2]])
-    with pytest.raises(openmm.OpenMMException) as error:
-        integrator.setRotationMethod(7)
-    assert "rotation method" in str(error.value).lower(), str(error.value)
-    assert integrator.getRotationMethod() == RigidBodyIntegrator.Exact
-    context = systems.make_context(small_system(), integrator, platform)
-    context.setPositions(SMALL_POSITIONS)
-    with pytest.raises(openmm.OpenMMException):
-        integrator.setRotationMethod(-1)
-    integrator.step(3)
-    assert np.max(np.abs(systems.positions_of(context) - SMALL_POSITIONS)) < 1e-12

@@ -11,7 +11,7 @@
 - on a box of rigid TIP3P water (PME, 2 fs) the total energy of Omelyan2 fluctuates less than half
   as much as Verlet's (Omelyan, Mryglod and Folk's optimized scheme);
 - the API: constants, defaults, errors naming the bad value; copies and serialization keep the
-  splitting, and version-1 XML (before splittings) reads as Verlet.
+  splitting (versions of the XML format: TestSerialization.cpp).
 
 Each splitting's order, exact free motion, time reversal, conservation of momentum and constraints
 among free particles (Yoshida4 fourth order with them) are tested in C++, tests/TestRigidBodyIntegrator.h,
@@ -355,22 +355,6 @@ def test_xml_writes_the_splitting():
     integrator.setSplitting(RigidBodyIntegrator.Yoshida4)
     xml = openmm.XmlSerializer.serialize(integrator)
     assert 'version="3"' in xml and 'splitting="2"' in xml
-
-
-def test_version_1_xml_reads_as_verlet():
-    """A file written before splittings existed (version 1, as that version wrote it) keeps all its
-    settings and steps with Verlet."""
-    xml = ('<?xml version="1.0" ?>\n<Integrator constraintTolerance="3e-07" explicitBodies="1" '
-           'integrationForceGroups="37" rotationMethod="1" stepSize=".0015" type="RigidBodyIntegrator" version="1">'
-           '<Bodies><Body><Particle index="0"/><Particle index="1"/><Particle index="2"/></Body></Bodies>'
-           '</Integrator>\n')
-    integrator = openmm.XmlSerializer.deserialize(xml)
-    assert type(integrator) is RigidBodyIntegrator
-    assert integrator.getSplitting() == RigidBodyIntegrator.Verlet
-    assert integrator.getRotationMethod() == RigidBodyIntegrator.NoSquish
-    assert integrator.getExplicitBodies() == [[0, 1, 2]]
-    assert integrator.getIntegrationForceGroups() == 37
-    assert integrator.getStepSize().value_in_unit(unit.picosecond) == 0.0015
 
 
 def test_bad_splitting_in_xml():
