@@ -17,6 +17,7 @@
  * phase error (rotation angle) x eps that is inherent in rounding t.         *
  * -------------------------------------------------------------------------- */
 
+#include "RandomRotation.h"
 #include "numerics/FreeRotor.h"
 #include "numerics/SymmetricEigen.h"
 #include "openmm/internal/AssertionUtilities.h"
@@ -178,16 +179,6 @@ static Matrix3 rodrigues(const Vector3& x) {
     return r;
 }
 
-/** A uniformly distributed rotation matrix from a random unit quaternion. */
-static Matrix3 randomRotation() {
-    double a = normal(), b = normal(), c = normal(), d = normal();
-    double n = std::sqrt(a*a + b*b + c*c + d*d);
-    a /= n; b /= n; c /= n; d /= n;
-    return {{{a*a + b*b - c*c - d*d, 2*(b*c - a*d), 2*(b*d + a*c)},
-             {2*(b*c + a*d), a*a - b*b + c*c - d*d, 2*(c*d - a*b)},
-             {2*(b*d - a*c), 2*(c*d + a*b), a*a - b*b - c*c + d*d}}};
-}
-
 static Vector3 randomOmega() {
     double scale = std::exp(uniform(std::log(0.1), std::log(10.0)));
     return {scale*normal(), scale*normal(), scale*normal()};
@@ -247,7 +238,7 @@ static std::vector<Body> randomBodies(FreeRotor::Kind kind, int count) {
             break;
         }
         body.omega = randomOmega();
-        body.attitude = randomRotation();
+        body.attitude = RigidBodyTestSupport::randomRotation(normal);
         body.name = std::string("random ") + FreeRotor::kindName(kind) + " body " + std::to_string(n);
         bodies.push_back(body);
     }
@@ -281,19 +272,19 @@ static std::vector<Body> delicateBodies() {
     // Exactly on the separatrix, in exact arithmetic on these doubles: I = (1, 5, 9), omega = (3, w2, 1)
     // gives L^2 - 2E I2 = 1*9*(1 - 5) + 9*1*(9 - 5) = 0 for any w2.
     bodies.push_back({{1, 5, 9}, {3, 0.5, 1}, identity, "exact separatrix"});
-    bodies.push_back({{9, 5, 1}, {1, -0.5, 3}, randomRotation(), "exact separatrix, reversed moments"});
-    bodies.push_back({{5, 9, 1}, {0.5, 1, -3}, randomRotation(), "exact separatrix, cyclic moments"});
-    bodies.push_back({{1, 5, 9}, {3, 0, 1}, randomRotation(), "exact separatrix, on the homoclinic orbit's midpoint"});
+    bodies.push_back({{9, 5, 1}, {1, -0.5, 3}, RigidBodyTestSupport::randomRotation(normal), "exact separatrix, reversed moments"});
+    bodies.push_back({{5, 9, 1}, {0.5, 1, -3}, RigidBodyTestSupport::randomRotation(normal), "exact separatrix, cyclic moments"});
+    bodies.push_back({{1, 5, 9}, {3, 0, 1}, RigidBodyTestSupport::randomRotation(normal), "exact separatrix, on the homoclinic orbit's midpoint"});
     // Close to the separatrix on either side.
     for (double offset : {1e-3, -1e-3, 1e-8, -1e-8, 1e-14, -1e-14}) {
         Vector3 moments = {1.3, 2.9, 4.1};
         Vector3 omega = nearSeparatrixOmega(moments, {0.7, -1.1, 0.9}, offset);
-        bodies.push_back({moments, omega, randomRotation(), "near separatrix, offset " + str(offset)});
+        bodies.push_back({moments, omega, RigidBodyTestSupport::randomRotation(normal), "near separatrix, offset " + str(offset)});
     }
     // At and near the turning points of the periodic orbit, where omega_1 = 0 and sn(eps) = +-1.
     for (double small : {0.0, 1e-300, 1e-100, 1e-12, 1e-8, -1e-8, 1e-6, 1e-4}) {
-        bodies.push_back({{10, 20, 26}, {small, 15, 1}, randomRotation(), "turning point, omega_1 = " + str(small)});
-        bodies.push_back({{26, 20, 10}, {1, -15, small}, randomRotation(), "turning point (reversed), omega_3 = " + str(small)});
+        bodies.push_back({{10, 20, 26}, {small, 15, 1}, RigidBodyTestSupport::randomRotation(normal), "turning point, omega_1 = " + str(small)});
+        bodies.push_back({{26, 20, 10}, {1, -15, small}, RigidBodyTestSupport::randomRotation(normal), "turning point (reversed), omega_3 = " + str(small)});
     }
     // Close to, and exactly on, the principal axes (steady rotation about the smallest, middle and largest).
     for (const Vector3& moments : ASYMMETRIC_MOMENTS)
@@ -301,18 +292,18 @@ static std::vector<Body> delicateBodies() {
             for (double small : {0.0, 1e-100, 1e-20, 1e-9}) {
                 Vector3 omega = {small, -small, 0.5*small};
                 omega[axis] = 1.7;
-                bodies.push_back({moments, omega, randomRotation(),
+                bodies.push_back({moments, omega, RigidBodyTestSupport::randomRotation(normal),
                                   "principal axis " + std::to_string(axis) + " with off-axis " + str(small)});
             }
     // Exactly one zero component (sgn(0) in eqs. (3.36)-(3.39)), and omega = 0.
-    bodies.push_back({{1, 2, 3}, {0.0, 1.0, 2.0}, randomRotation(), "omega_1 = 0"});
-    bodies.push_back({{1, 2, 3}, {1.0, 0.0, 2.0}, randomRotation(), "omega_2 = 0"});
-    bodies.push_back({{1, 2, 3}, {1.0, 2.0, 0.0}, randomRotation(), "omega_3 = 0"});
-    bodies.push_back({{1, 2, 3}, {0.0, 0.0, 0.0}, randomRotation(), "omega = 0"});
+    bodies.push_back({{1, 2, 3}, {0.0, 1.0, 2.0}, RigidBodyTestSupport::randomRotation(normal), "omega_1 = 0"});
+    bodies.push_back({{1, 2, 3}, {1.0, 0.0, 2.0}, RigidBodyTestSupport::randomRotation(normal), "omega_2 = 0"});
+    bodies.push_back({{1, 2, 3}, {1.0, 2.0, 0.0}, RigidBodyTestSupport::randomRotation(normal), "omega_3 = 0"});
+    bodies.push_back({{1, 2, 3}, {0.0, 0.0, 0.0}, RigidBodyTestSupport::randomRotation(normal), "omega = 0"});
     // Nearly symmetric and nearly spherical (moments equal to 1e-12 relative): m tends to 0.
-    bodies.push_back({{10, 10*(1 + 1e-12), 26}, {0.3, -1.2, 0.8}, randomRotation(), "nearly prolate"});
-    bodies.push_back({{10, 26*(1 - 1e-12), 26}, {0.3, -1.2, 0.8}, randomRotation(), "nearly oblate"});
-    bodies.push_back({{10, 10*(1 + 1e-12), 10*(1 + 2e-12)}, {0.3, -1.2, 0.8}, randomRotation(), "nearly spherical"});
+    bodies.push_back({{10, 10*(1 + 1e-12), 26}, {0.3, -1.2, 0.8}, RigidBodyTestSupport::randomRotation(normal), "nearly prolate"});
+    bodies.push_back({{10, 26*(1 - 1e-12), 26}, {0.3, -1.2, 0.8}, RigidBodyTestSupport::randomRotation(normal), "nearly oblate"});
+    bodies.push_back({{10, 10*(1 + 1e-12), 10*(1 + 2e-12)}, {0.3, -1.2, 0.8}, RigidBodyTestSupport::randomRotation(normal), "nearly spherical"});
     return bodies;
 }
 
@@ -602,7 +593,7 @@ void testSteadyRotation() {
             for (double size : {-2.3, 1e-3, 4.0}) {
                 Vector3 omega = {0, 0, 0};
                 omega[axis] = size;
-                Body body = {moments, omega, randomRotation(), "steady rotation about axis " + std::to_string(axis)};
+                Body body = {moments, omega, RigidBodyTestSupport::randomRotation(normal), "steady rotation about axis " + std::to_string(axis)};
                 FreeRotor rotor = makeRotor(body);
                 for (double angle : {0.5, -2.0, 20.0}) {
                     double t = angle/std::fabs(size);
@@ -722,7 +713,7 @@ void testNearlySymmetric() {
                                {{3.3*(1 - 1e-12), 3.3, 3.3*(1 + 1e-12)}, {3.3, 3.3, 3.3}}};
     for (const Pair& pair : pairs)
         for (int trial = 0; trial < 10; trial++) {
-            Body body = {pair.nearly, randomOmega(), randomRotation(), "nearly symmetric"};
+            Body body = {pair.nearly, randomOmega(), RigidBodyTestSupport::randomRotation(normal), "nearly symmetric"};
             FreeRotor nearly = makeRotor(body);
             FreeRotor exact = makeRotor({pair.exact, body.omega, body.attitude, "exactly symmetric"});
             ASSERT(exact.getKind() == FreeRotor::Symmetric || exact.getKind() == FreeRotor::Spherical);
@@ -774,7 +765,7 @@ void testScaling() {
  * stay finite, orthonormal and conservative (u = wp t beyond ~355 makes sech(u)^2 underflow).
  */
 void testSeparatrixLongTimes() {
-    Body body = {{1, 5, 9}, {3, 0.5, 1}, randomRotation(), "exact separatrix"};
+    Body body = {{1, 5, 9}, {3, 0.5, 1}, RigidBodyTestSupport::randomRotation(normal), "exact separatrix"};
     FreeRotor rotor = makeRotor(body);
     ASSERT_EQUAL_TOL(1.0, rotor.getParameter(), 0.0);
     double energy = kineticEnergy(body.moments, body.omega);
@@ -800,7 +791,7 @@ void testTinyOffAxisComponents() {
             for (double small : {1e-200, 1e-300}) {
                 Vector3 omega = {small, -small, 0.5*small};
                 omega[axis] = 1.7;
-                Body body = {moments, omega, randomRotation(), "principal axis " + std::to_string(axis) + " with off-axis " + str(small)};
+                Body body = {moments, omega, RigidBodyTestSupport::randomRotation(normal), "principal axis " + std::to_string(axis) + " with off-axis " + str(small)};
                 FreeRotor rotor = makeRotor(body);
                 for (double angle : {0.0, 0.5, -2.0, 20.0}) {
                     double t = angle/1.7;
@@ -847,7 +838,7 @@ void testAdvance() {
     assertSmall(maxDifference(reference.attitude, state.attitude), 1e-9, "advance A vs RK4", describe(body, times[0]), __LINE__);
     const double nan = std::numeric_limits<double>::quiet_NaN();
     Vector3 omega = {0.3, -1.0, 2.0};
-    Matrix3 attitude = randomRotation();
+    Matrix3 attitude = RigidBodyTestSupport::randomRotation(normal);
     assertThrowsInvalidArgument([&]() { FreeRotor::advance({1, 2, 3}, omega, attitude, nan); }, "advance(NaN)", __LINE__);
     assertThrowsInvalidArgument([&]() { FreeRotor::advance({-1, 2, 3}, omega, attitude, 1.0); }, "advance, negative moment", __LINE__);
 }
@@ -869,7 +860,7 @@ void testInvalidInput() {
     assertThrowsInvalidArgument(build({1, 2, 3}, {nan, 0, 0}, identity), "NaN omega", __LINE__);
     assertThrowsInvalidArgument(build({1, 2, 3}, {0, -inf, 0}, identity), "infinite omega", __LINE__);
     assertThrowsInvalidArgument(build({2, 2, 2}, {0, 0, nan}, identity), "NaN omega (spherical)", __LINE__);
-    Matrix3 scaled = randomRotation();
+    Matrix3 scaled = RigidBodyTestSupport::randomRotation(normal);
     for (auto& row : scaled)
         for (double& x : row)
             x *= 1.001;
@@ -891,7 +882,7 @@ void testInvalidInput() {
     FreeRotor rotor({1, 2, 3}, omega, identity);
     assertThrowsInvalidArgument([&]() { State s = evolve(rotor, nan); (void) s; }, "evolve(NaN)", __LINE__);
     // Rounding-level deviations from orthonormality, as produced by a caller's arithmetic, are accepted.
-    Matrix3 nearly = randomRotation();
+    Matrix3 nearly = RigidBodyTestSupport::randomRotation(normal);
     nearly[1][2] += 1e-14;
     FreeRotor accepted({1, 2, 3}, omega, nearly);
     (void) accepted;
@@ -911,7 +902,7 @@ void testClassification() {
                                {{2, 1e-14, 2*(1 + 5e-14)}, FreeRotor::Linear}, {{1, 1 + 1e-12, 3}, FreeRotor::Asymmetric},
                                {{1e-12, 1, 1}, FreeRotor::Symmetric}, {{10, 10*(1 + 1e-12), 26}, FreeRotor::Asymmetric}};
     for (const Case& c : cases) {
-        Body body = {c.moments, randomOmega(), randomRotation(), "classification case"};
+        Body body = {c.moments, randomOmega(), RigidBodyTestSupport::randomRotation(normal), "classification case"};
         FreeRotor rotor = makeRotor(body);
         std::string where = describe(body, 0.0);
         if (rotor.getKind() != c.kind)
@@ -951,7 +942,7 @@ void testClassification() {
         bool spherical = (trial%2 == 0);
         const std::vector<Vector3>& shape = (spherical ? tetrahedron : pyramid);
         std::vector<double> masses = (spherical ? std::vector<double>{1, 1, 1, 1} : std::vector<double>{14, 1, 1, 1});
-        Matrix3 rotation = randomRotation();
+        Matrix3 rotation = RigidBodyTestSupport::randomRotation(normal);
         Vector3 centre = {uniform(2, 6), uniform(2, 6), uniform(2, 6)};
         std::vector<Vector3> positions;
         Vector3 mean = {0, 0, 0};
@@ -990,7 +981,7 @@ void testClassification() {
     ASSERT_EQUAL(RigidStatusOk, rigidClassifyMoments(Vector3{0, 0, 0}.data(), &point));
     ASSERT_EQUAL(RigidKindPoint, point.kind);
     // A point does not turn: rigidRotorAdvance keeps its attitude and zeroes omega.
-    Matrix3 original = randomRotation();
+    Matrix3 original = RigidBodyTestSupport::randomRotation(normal);
     double attitude[3][3];
     for (int i = 0; i < 3; i++)
         for (int j = 0; j < 3; j++)

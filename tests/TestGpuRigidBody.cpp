@@ -14,7 +14,8 @@
  * on PoCL's OpenCL.                                                          *
  * -------------------------------------------------------------------------- */
 
-#include "TestRigidBodyThermostats.h"  // (it includes TestRigidBodyIntegrator.h)
+#include "TestRigidBodyIntegrator.h"
+#include "TestRigidBodyThermostats.h"
 #include <string>
 
 int main(int argc, char* argv[]) {

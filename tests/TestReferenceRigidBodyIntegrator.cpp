@@ -11,5 +11,5 @@ int main() {
     return RigidBodyIntegratorTests::runMain([]() -> OpenMM::Platform& {
         registerKernelFactories();  // libOpenMMRigidReference: the kernels for Reference and CPU
         return OpenMM::Platform::getPlatformByName("Reference");
-    });
+    }, RigidBodyIntegratorTests::runPlatformTests);
 }

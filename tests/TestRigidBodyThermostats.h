@@ -36,45 +36,12 @@
  *   naming the value, leaving the integrator and its Context usable.        *
  * -------------------------------------------------------------------------- */
 
-#include "TestRigidBodyIntegrator.h"
-#include "RigidBodyLangevinIntegrator.h"
+#include "RigidBodyTestSystems.h"
 #include "numerics/Philox.h"
 #include "numerics/StochasticRescaling.h"
 #include "openmm/CustomExternalForce.h"
 
 namespace RigidBodyIntegratorTests {
-
-struct LangevinRun {
-    std::unique_ptr<RigidBodyLangevinIntegrator> integrator;
-    std::unique_ptr<Context> context;
-};
-
-LangevinRun startLangevin(const Scene& scene, Platform& platform, double temperature, double friction, double dt, int seed,
-                          const std::map<string, string>& properties = platformProperties) {
-    LangevinRun run;
-    run.integrator.reset(new RigidBodyLangevinIntegrator(temperature, friction, dt, scene.bodies));
-    run.integrator->setRandomNumberSeed(seed);
-    run.context.reset(new Context(*scene.system, *run.integrator, platform, properties));
-    run.context->setPositions(scene.positions);
-    run.context->setVelocities(scene.velocities);
-    return run;
-}
-
-/** The mean and the standard error of the mean of independent samples; the sample variance and its standard error. */
-void sampleMoments(const vector<double>& x, double& mean, double& meanError, double& variance, double& varianceError) {
-    const double n = x.size();
-    mean = 0;
-    for (double v : x)
-        mean += v/n;
-    double m2 = 0, m4 = 0;
-    for (double v : x) {
-        m2 += (v - mean)*(v - mean)/n;
-        m4 += pow(v - mean, 4)/n;
-    }
-    variance = m2*n/(n - 1);
-    meanError = sqrt(variance/n);
-    varianceError = sqrt((m4 - m2*m2)/n);
-}
 
 // ------------------------------------------------------------------------------------------------
 // The random numbers
@@ -435,18 +402,6 @@ void testBadTemperatureAndFriction(Platform& platform) {
 // ------------------------------------------------------------------------------------------------
 // RigidBodyIntegrator's thermostat (stochastic velocity rescaling)
 // ------------------------------------------------------------------------------------------------
-
-Run startThermostat(const Scene& scene, Platform& platform, double temperature, double collisionTime, double dt, int seed,
-                    const std::map<string, string>& properties = platformProperties) {
-    Run run;
-    run.integrator.reset(new RigidBodyIntegrator(dt, scene.bodies));
-    run.integrator->setThermostat(temperature, collisionTime);
-    run.integrator->setRandomNumberSeed(seed);
-    run.context.reset(new Context(*scene.system, *run.integrator, platform, properties));
-    run.context->setPositions(scene.positions);
-    run.context->setVelocities(scene.velocities);
-    return run;
-}
 
 /**
  * Free bodies of every kind and two free atoms, no forces: the free motion keeps the kinetic energy

@@ -14,6 +14,7 @@
  * libm, so agreement is required to the last bit.                            *
  * -------------------------------------------------------------------------- */
 
+#include "../RandomRotation.h"
 #include "CoreC.h"
 #include "numerics/Elliptic.h"
 #include "numerics/FreeRotor.h"
@@ -43,15 +44,6 @@ static double uniform(double low, double high) {
 
 static double normal() {
     return std::normal_distribution<double>(0.0, 1.0)(rng);
-}
-
-static Matrix3 randomRotation() {
-    double a = normal(), b = normal(), c = normal(), d = normal();
-    double n = std::sqrt(a*a + b*b + c*c + d*d);
-    a /= n; b /= n; c /= n; d /= n;
-    return {{{a*a + b*b - c*c - d*d, 2*(b*c - a*d), 2*(b*d + a*c)},
-             {2*(b*c + a*d), a*a - b*b + c*c - d*d, 2*(c*d - a*b)},
-             {2*(b*d - a*c), 2*(c*d + a*b), a*a - b*b - c*c + d*d}}};
 }
 
 /** Fails unless a and b are the same double to the last bit (so -0 differs from +0, and NaN fails). */
@@ -132,7 +124,7 @@ static void copyAttitude(const Matrix3& a, double* flat) {
 /** evolve() in each representation and advance(), the C core against FreeRotor. */
 void testRotor() {
     for (const Body& body : bodies()) {
-        Matrix3 attitude = randomRotation();
+        Matrix3 attitude = RigidBodyTestSupport::randomRotation(normal);
         double flat[9];
         copyAttitude(attitude, flat);
         double scale = std::max({std::fabs(body.omega[0]), std::fabs(body.omega[1]), std::fabs(body.omega[2]), 1e-300});
@@ -230,7 +222,7 @@ void testSpecialFunctions() {
 /** NO_SQUISH, Philox and the normal deviates. */
 void testNoSquishAndRandomNumbers() {
     for (const Vector3& moments : std::vector<Vector3>{{1, 2, 3}, {0, 2, 2}, {2, 2, 2}, {3, 1, 1}}) {
-        Matrix3 attitude = randomRotation();
+        Matrix3 attitude = RigidBodyTestSupport::randomRotation(normal);
         Vector3 l = {normal(), normal(), normal()};
         for (double dt : {0.002, -0.5, 3.0}) {
             Matrix3 a = attitude;

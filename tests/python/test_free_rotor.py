@@ -477,7 +477,7 @@ def test_linear_rotor(axis):
 
 
 # ============================================================================================
-# Scale covariance: |omega| from 1e-8 to 1e8; the unit of the moments is irrelevant
+# Scale covariance: |omega| from 1e-8 to 1e8 (the unit of the moments: TestFreeRotor.cpp, testScaling)
 
 SCALE_BODIES = {
     "generic": ((0.7, 1.9, 1.2), (0.4, -0.9, 0.6)),
@@ -502,17 +502,6 @@ def test_omega_scale_covariance(body, scale):
                    np.linalg.norm(omega), 1e-14 if exact else 1e-12,
                    f"scale {scale}: " + describe(moments, omega * scale, attitude, times / scale))
     assert_matches_reference(scaled, moments, omega * scale, attitude, times / scale)
-
-
-@pytest.mark.parametrize("unit", [1e-6, 3.0, 1e6])
-def test_moment_scale_invariance(unit):
-    moments, omega = (np.array(x) for x in SCALE_BODIES["generic"])
-    attitude = reference.random_rotation(np.random.default_rng(13))
-    times = np.array([0.37, 2.9, -1.1]) * rotation_period(omega)
-    want = FreeRotor(moments, omega, attitude).evolve(times)
-    got = FreeRotor(moments * unit, omega, attitude).evolve(times)
-    assert_matches(*got, *want, np.linalg.norm(omega), 1e-12,
-                   f"moments x {unit}: " + describe(moments, omega, attitude))
 
 
 # ============================================================================================

@@ -6,17 +6,16 @@
   each scheme written the way its paper writes it) must evaluate the forces at the same
   configurations, the same number of times (getNumForceEvaluations() per step), and end in the same
   state, to 1e-12;
-- order: the error at a fixed time against a run with a 32 times smaller step falls by 2^p when the
-  step halves (p = 2 for Verlet and Omelyan2, 4 for Yoshida4 and Omelyan4);
-- without forces, every splitting gives the exact free motion (openmmrigid.FreeRotor and straight
-  lines) to 1e-12 per drift of a step; time reversal and conservation of momentum for each;
-- constraints among free particles hold for every splitting, and Yoshida4 stays fourth order with them;
 - a CMMotionRemover (which changes velocities without telling the integrator) leaves the trajectory
   of a cluster with no net momentum unchanged for every splitting;
 - on a box of rigid TIP3P water (PME, 2 fs) the total energy of Omelyan2 fluctuates less than half
   as much as Verlet's (Omelyan, Mryglod and Folk's optimized scheme);
 - the API: constants, defaults, errors naming the bad value; copies and serialization keep the
-  splitting, and version-1 XML (before splittings) reads as Verlet.
+  splitting (versions of the XML format: TestSerialization.cpp).
+
+Each splitting's order, exact free motion, time reversal, conservation of momentum and constraints
+among free particles (Yoshida4 fourth order with them) are tested in C++, tests/TestRigidBodyIntegrator.h,
+on the Reference, CPU and OpenCL platforms.
 """
 
 import copy
@@ -35,7 +34,6 @@ PLATFORMS = ["Reference", "CPU"]
 SPLITTINGS = {"Verlet": RigidBodyIntegrator.Verlet, "Omelyan2": RigidBodyIntegrator.Omelyan2,
               "Yoshida4": RigidBodyIntegrator.Yoshida4, "Omelyan4": RigidBodyIntegrator.Omelyan4}
 FORCE_EVALUATIONS = {"Verlet": 1, "Omelyan2": 2, "Yoshida4": 3, "Omelyan4": 4}
-ORDERS = {"Verlet": 2, "Omelyan2": 2, "Yoshida4": 4, "Omelyan4": 4}
 
 # ------------------------------------------------------------------------------------------------
 # Each scheme as its paper writes it: a list of ("kick", fraction of the step) and ("drift", ...).
@@ -232,7 +230,7 @@ def test_stage_sequence(platform, name):
 
 
 # ------------------------------------------------------------------------------------------------
-# Order, free motion, reversibility, momentum
+# Velocities changed behind the integrator's back
 # ------------------------------------------------------------------------------------------------
 
 def rigid_integrator(dt, bodies, name, method=RigidBodyIntegrator.Exact):
@@ -248,150 +246,6 @@ def start(cluster, platform, dt, name, system=None):
     context.setPositions(cluster.positions)
     context.setVelocities(cluster.velocities)
     return integrator, context
-
-
-def run_positions(cluster, platform, dt, time, name):
-    integrator, context = start(cluster, platform, dt, name)
-    integrator.step(round(time / dt))
-    return systems.positions_of(context)
-
-
-def rms(a, b):
-    return np.sqrt(np.mean(np.sum((a - b) ** 2, axis=1)))
-
-
-@pytest.fixture(scope="module")
-def interacting_cluster():
-    return systems.cluster(seed=7, grid=(3, 3, 2))
-
-
-@pytest.mark.parametrize("name", list(SPLITTINGS))
-@pytest.mark.parametrize("platform", PLATFORMS)
-def test_order(interacting_cluster, platform, name):
-    """The rms position error at t = 0.1 ps against a run with a 32 times smaller step falls by 2^p
-    (1 +- 1/8) when the step halves: 1 fs -> 0.5 fs for p = 2, 2 fs -> 1 fs for p = 4. The schemes are
-    symmetric, so the ratio is 2^p (1 + O(dt^2)): measured 4.00 to 4.01 and 15.6 to 16.1 here, while a
-    scheme of the other order would give 16 or 4."""
-    order = ORDERS[name]
-    step = 0.001 if order == 2 else 0.002
-    reference = run_positions(interacting_cluster, platform, step / 32, 0.1, name)
-    errors = [rms(run_positions(interacting_cluster, platform, dt, 0.1, name), reference) for dt in (step, step / 2)]
-    ratio, expected = errors[0] / errors[1], 2.0 ** order
-    assert abs(ratio - expected) < expected / 8, \
-        f"{name}: errors {errors[0]:.3g} nm ({1000 * step:g} fs), {errors[1]:.3g} nm ({500 * step:g} fs): ratio {ratio:.3f}"
-
-
-@pytest.mark.parametrize("name", list(SPLITTINGS))
-@pytest.mark.parametrize("platform", PLATFORMS)
-def test_free_motion_is_exact(platform, name):
-    """Without forces, every splitting moves the bodies by the exact free rotor and the free particles
-    in straight lines, for steps from 2 fs to 4 ps: positions (nm) and velocities (relative to the
-    largest speed) within 1e-12 per drift of a step (each drift adds the rotor's rounding)."""
-    cluster = systems.cluster(seed=4, grid=(2, 2, 2), forces=False)
-    exact = systems.rigid_motion(cluster.masses, cluster.positions, cluster.velocities, cluster.bodies, cluster.free)
-    integrator, context = start(cluster, platform, 0.002, name)
-    tolerance = 1e-12 * FORCE_EVALUATIONS[name]
-    speed = np.max(np.linalg.norm(cluster.velocities, axis=1))
-    t = 0.0
-    for dt, steps in [(0.002, 200), (0.0137, 20), (0.731, 3), (4.0, 1)]:
-        integrator.setStepSize(dt)
-        integrator.step(steps)
-        t += dt * steps
-        expectedPositions, expectedVelocities = exact(t)
-        positionError = np.max(np.abs(systems.positions_of(context) - expectedPositions))
-        velocityError = np.max(np.abs(systems.velocities_of(context) - expectedVelocities)) / speed
-        assert positionError < tolerance, f"t = {t:g} ps (steps of {dt} ps): positions off by {positionError:.3g} nm"
-        assert velocityError < tolerance, f"t = {t:g} ps (steps of {dt} ps): velocities off by {velocityError:.3g}"
-
-
-@pytest.mark.parametrize("name", list(SPLITTINGS))
-@pytest.mark.parametrize("platform", PLATFORMS)
-def test_time_reversible(interacting_cluster, platform, name):
-    """200 steps of 2 fs, velocities negated, 200 steps: back at the start within 1e-8 nm (measured
-    1e-14 to 3e-14 nm)."""
-    integrator, context = start(interacting_cluster, platform, 0.002, name)
-    integrator.step(200)
-    assert np.max(np.abs(systems.positions_of(context) - interacting_cluster.positions)) > 0.05
-    context.setVelocities(-systems.velocities_of(context))
-    integrator.step(200)
-    error = np.max(np.abs(systems.positions_of(context) - interacting_cluster.positions))
-    assert error < 1e-8, f"returned within {error:.3g} nm of the start"
-
-
-@pytest.mark.parametrize("name", list(SPLITTINGS))
-@pytest.mark.parametrize("platform", PLATFORMS)
-def test_momentum_conserved(platform, name):
-    """A drifting, spinning isolated cluster keeps its total linear and angular momentum to 1e-10."""
-    cluster = systems.cluster(seed=9, grid=(3, 3, 2), drift=(0.3, -0.2, 0.1), spin=1.5)
-    integrator, context = start(cluster, platform, 0.002, name)
-    masses = cluster.masses[:, None]
-
-    def momenta():
-        r, v = systems.positions_of(context), systems.velocities_of(context)
-        return np.sum(masses * v, axis=0), np.sum(masses * np.cross(r, v), axis=0)
-
-    linear0, angular0 = momenta()
-    integrator.step(300)
-    linear, angular = momenta()
-    assert np.linalg.norm(linear - linear0) / np.linalg.norm(linear0) < 1e-10
-    assert np.linalg.norm(angular - angular0) / np.linalg.norm(angular0) < 1e-10
-
-
-# ------------------------------------------------------------------------------------------------
-# Constraints, velocities changed behind the integrator's back
-# ------------------------------------------------------------------------------------------------
-
-def constrained_cluster():
-    """The interacting cluster with its two free atoms held at a fixed distance (relative velocity
-    along the bond removed, so that the start satisfies the constraint)."""
-    cluster = systems.cluster(seed=7, grid=(3, 3, 2))
-    a, b = cluster.free
-    bond = cluster.positions[a] - cluster.positions[b]
-    length = np.linalg.norm(bond)
-    cluster.system.addConstraint(a, b, length)
-    unit_bond = bond / length
-    along = (cluster.velocities[a] - cluster.velocities[b]) @ unit_bond
-    ma, mb = cluster.masses[a], cluster.masses[b]
-    cluster.velocities[a] -= along * unit_bond * mb / (ma + mb)
-    cluster.velocities[b] += along * unit_bond * ma / (ma + mb)
-    return cluster, (a, b), length
-
-
-@pytest.mark.parametrize("name", list(SPLITTINGS))
-@pytest.mark.parametrize("platform", PLATFORMS)
-def test_constraints_among_free_particles(platform, name):
-    """Every splitting keeps a constraint between free particles: its length to the tolerance (1e-10)
-    and its rate of change to 1e-8 nm/ps after 100 steps of 2 fs."""
-    cluster, (a, b), length = constrained_cluster()
-    integrator, context = start(cluster, platform, 0.002, name)
-    integrator.setConstraintTolerance(1e-10)
-    integrator.step(100)
-    r, v = systems.positions_of(context), systems.velocities_of(context)
-    bond = r[a] - r[b]
-    assert abs(np.linalg.norm(bond) / length - 1) < 1e-10
-    assert abs((v[a] - v[b]) @ bond / np.linalg.norm(bond)) < 1e-8
-    assert np.linalg.norm(r[a] - cluster.positions[a]) > 0.01
-
-
-@pytest.mark.parametrize("platform", PLATFORMS)
-def test_yoshida4_fourth_order_with_constraints(platform):
-    """Yoshida4 is a composition of RATTLE-like Verlet steps (the velocity projections between its
-    merged kicks change nothing: the next drift's position constraints absorb any velocity along the
-    bond), so it stays fourth order for the constrained pair: the pair's position error falls by
-    16 +- 2 from 2 fs to 1 fs (measured 15.9). (Omelyan4 does not: its drifts of constrained particles
-    are SHAKE's, a second-order approximation of the free motion, which makes it second order there.)"""
-    cluster, pair, _ = constrained_cluster()
-    pair = list(pair)
-
-    def run(dt):
-        integrator, context = start(cluster, platform, dt, "Yoshida4")
-        integrator.setConstraintTolerance(1e-12)
-        integrator.step(round(0.1 / dt))
-        return systems.positions_of(context)[pair]
-
-    reference = run(0.002 / 32)
-    errors = [rms(run(dt), reference) for dt in (0.002, 0.001)]
-    assert abs(errors[0] / errors[1] - 16) < 2, f"errors {errors[0]:.3g}, {errors[1]:.3g} nm: ratio {errors[0] / errors[1]:.2f}"
 
 
 @pytest.mark.parametrize("name", list(SPLITTINGS))
@@ -501,22 +355,6 @@ def test_xml_writes_the_splitting():
     integrator.setSplitting(RigidBodyIntegrator.Yoshida4)
     xml = openmm.XmlSerializer.serialize(integrator)
     assert 'version="3"' in xml and 'splitting="2"' in xml
-
-
-def test_version_1_xml_reads_as_verlet():
-    """A file written before splittings existed (version 1, as that version wrote it) keeps all its
-    settings and steps with Verlet."""
-    xml = ('<?xml version="1.0" ?>\n<Integrator constraintTolerance="3e-07" explicitBodies="1" '
-           'integrationForceGroups="37" rotationMethod="1" stepSize=".0015" type="RigidBodyIntegrator" version="1">'
-           '<Bodies><Body><Particle index="0"/><Particle index="1"/><Particle index="2"/></Body></Bodies>'
-           '</Integrator>\n')
-    integrator = openmm.XmlSerializer.deserialize(xml)
-    assert type(integrator) is RigidBodyIntegrator
-    assert integrator.getSplitting() == RigidBodyIntegrator.Verlet
-    assert integrator.getRotationMethod() == RigidBodyIntegrator.NoSquish
-    assert integrator.getExplicitBodies() == [[0, 1, 2]]
-    assert integrator.getIntegrationForceGroups() == 37
-    assert integrator.getStepSize().value_in_unit(unit.picosecond) == 0.0015
 
 
 def test_bad_splitting_in_xml():

@@ -1,15 +1,13 @@
 """Tests of openmmrigid.RigidBodyLangevinIntegrator from Python (the C++ tests,
-TestRigidBodyLangevinIntegrator.h, check the exact properties of the step on both platforms):
+TestRigidBodyThermostats.h, check the exact properties of the step on the Reference, CPU and OpenCL
+platforms: seeds, friction 0 as leapfrog Verlet, exact damping at temperature 0, ...):
 
 - a small box of rigid TIP3P water reaches the bath temperature in translation and in rotation,
   each within 4.5 block standard errors;
 - the kinetic energy of free rigid bodies (no forces) follows the canonical Gamma distribution:
   Kolmogorov-Smirnov tests of the total and of the rotational energy of single asymmetric and
   linear bodies;
-- a fixed seed reproduces a trajectory, another seed or seed 0 does not; Simulation checkpoints
-  continue it;
-- friction 0 conserves energy like RigidBodyIntegrator; temperature 0 with friction damps the
-  motion away;
+- Simulation checkpoints continue a trajectory (its random numbers too);
 - bad temperatures and frictions raise openmm.OpenMMException and leave the Context usable;
 - construction from floats and Quantities, the getters' units, pickle, copy, deepcopy,
   XmlSerializer and deserializeIntegrator keep every setting and give back the right class; the
@@ -199,24 +197,6 @@ def test_kinetic_energy_distribution_is_canonical():
 # Seeds, checkpoints, limits of friction and temperature
 # ------------------------------------------------------------------------------------------------
 
-def run_positions(platformName, seed, steps=30, friction=5.0):
-    integrator = RigidBodyLangevinIntegrator(300.0, friction, 0.001, EXPLICIT_BODIES)
-    integrator.setRandomNumberSeed(seed)
-    context = trapped_context(platformName, integrator)
-    integrator.step(steps)
-    return systems.positions_of(context)
-
-
-@pytest.mark.parametrize("platformName", PLATFORMS)
-def test_seeds(platformName):
-    same = run_positions(platformName, 17), run_positions(platformName, 17)
-    assert np.array_equal(*same)
-    assert np.abs(same[0] - run_positions(platformName, 18)).max() > 1e-5
-    assert np.abs(run_positions(platformName, 0) - run_positions(platformName, 0)).max() > 1e-5
-    # Friction 0 draws nothing: the seed does not matter.
-    assert np.array_equal(run_positions(platformName, 1, friction=0.0), run_positions(platformName, 2, friction=0.0))
-
-
 @pytest.mark.parametrize("platformName", PLATFORMS)
 def test_simulation_checkpoint_continues(platformName):
     integrator = RigidBodyLangevinIntegrator(300.0, 5.0, 0.001, EXPLICIT_BODIES)
@@ -234,75 +214,6 @@ def test_simulation_checkpoint_continues(platformName):
     simulation.step(20)
     # Loading re-fits the bodies to the positions (rounding); other random numbers would differ by far more.
     assert np.abs(systems.positions_of(simulation.context) - expected).max() < 1e-10
-
-
-def on_step_energies(context, integrator, steps, interval):
-    """Total energies of an integrator whose velocities are half a step behind the positions, with
-    the on-step kinetic energy: after each block the half-step velocities are taken half a kick
-    forward, v + (dt/2) F/m, and set in a second Context (RigidBodyIntegrator), whose projection
-    onto rigid motion keeps each body's momentum and angular momentum: that is the half kick of the
-    bodies' momenta by their forces and torques. Every `interval` steps, with the times (ps)."""
-    system = context.getSystem()
-    masses = np.array([system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles())])
-    forward = np.where(masses > 0, 1 / np.where(masses > 0, masses, 1), 0)[:, None]
-    dt = integrator.getStepSize().value_in_unit(unit.picosecond)
-    helperIntegrator = RigidBodyIntegrator(dt)
-    helper = systems.make_context(system, helperIntegrator, "Reference")
-    times, energies = [], []
-    for k in range(0, steps + 1, interval):
-        if k > 0:
-            integrator.step(interval)
-        state = context.getState(getPositions=True, getVelocities=True, getForces=True, getEnergy=True)
-        forces = state.getForces(asNumpy=True).value_in_unit(unit.kilojoule_per_mole / unit.nanometer)
-        velocities = state.getVelocities(asNumpy=True).value_in_unit(unit.nanometer / unit.picosecond)
-        helper.setPositions(state.getPositions(asNumpy=True))
-        helper.setVelocities(velocities + 0.5 * dt * forces * forward)
-        kinetic = helper.getState(getEnergy=True).getKineticEnergy()
-        energies.append((state.getPotentialEnergy() + kinetic).value_in_unit(unit.kilojoule_per_mole))
-        times.append(k * dt)
-    return np.array(times), np.array(energies)
-
-
-def test_friction_zero_conserves_energy_like_the_constant_energy_integrator():
-    """Friction 0: kick, half drift, half drift (leapfrog Verlet with exact drifts, the velocities
-    half a step behind). In a water box its energy, with the on-step kinetic energy, fluctuates as
-    RigidBodyIntegrator's does (within 20 %; the trajectories differ, since the same velocities are
-    half-step ones for one and on-step ones for the other) and drifts no more, within three combined
-    standard errors of slopes through block means."""
-    box = systems.water_box("tip3p", size=1.5, seed=3)
-    results = {}
-    for name, integrator, energiesOf in (
-            ("langevin", RigidBodyLangevinIntegrator(300.0, 0.0, 0.002), on_step_energies),
-            ("verlet", RigidBodyIntegrator(0.002), systems.run_energies)):
-        context = systems.make_context(box.system, integrator, "CPU")
-        context.setPositions(box.positions)
-        context.setVelocities(box.velocities)
-        times, energies = energiesOf(context, integrator, 500, 5)
-        rms = systems.energy_drift(times, energies)[2]
-        results[name] = systems.block_drift(times, energies, 5) + (rms,)
-    (slope, error, rms), (verletSlope, verletError, verletRms) = results["langevin"], results["verlet"]
-    print(f"friction 0: drift {slope:.3f} +- {error:.3f} kJ/mol/ps, rms {rms:.4f} kJ/mol; RigidBodyIntegrator: "
-          f"{verletSlope:.3f} +- {verletError:.3f}, {verletRms:.4f}")
-    assert rms == pytest.approx(verletRms, rel=0.2)
-    assert abs(slope) <= abs(verletSlope) + 3 * np.hypot(error, verletError)
-
-
-def test_zero_temperature_damps_the_motion():
-    """Temperature 0 and friction 20/ps: in 2 ps the water box falls from 300 K to below 1 K. The
-    kinetic energy itself decays as exp(-40/ps t); what is left is the box still sliding down its
-    energy landscape, which after 1 ps still read 0.6 to 1.7 K (runs differ: CPU forces are not
-    bitwise repeatable) and after 2 ps 0.13 to 0.24 K."""
-    box = systems.water_box("tip3p", size=1.5, seed=3)
-    integrator = RigidBodyLangevinIntegrator(0.0, 20.0, 0.002)
-    context = systems.make_context(box.system, integrator, "CPU")
-    context.setPositions(box.positions)
-    context.setVelocities(box.velocities)
-    integrator.step(1)
-    start = integrator.computeSystemTemperature().value_in_unit(unit.kelvin)
-    integrator.step(1000)
-    end = integrator.computeSystemTemperature().value_in_unit(unit.kelvin)
-    print(f"T = 0: temperature {start:.1f} K -> {end:.3g} K in 2 ps")
-    assert start > 250 and end < 1.0
 
 
 @pytest.mark.parametrize("platformName", PLATFORMS)
