@@ -23,6 +23,7 @@
 #include "numerics/FreeRotor.h"
 #include "openmm/Context.h"
 #include "openmm/CustomBondForce.h"
+#include "openmm/CustomExternalForce.h"
 #include "openmm/HarmonicAngleForce.h"
 #include "openmm/HarmonicBondForce.h"
 #include "openmm/LangevinMiddleIntegrator.h"

@@ -15,6 +15,8 @@
  *   Omelyan2, 4 for Yoshida4 and Omelyan4 (Omelyan4 with NoSquish: 2); so    *
  *   does the energy error; NoSquish and Exact differ by O(dt^2);             *
  *   Omelyan2 is at least 4 times as accurate as Verlet at the same step;     *
+ * - coefficients: one step on a harmonic trap is the product of the kicks    *
+ *   and drifts of the paper's scheme (Verlet, Omelyan2, Yoshida4), 1e-12;    *
  * - for every splitting: the exact free motion without forces, time reversal *
  *   (1e-8 nm) and conservation of total linear and angular momentum of an    *
  *   isolated cluster (1e-10 relative);                                       *
@@ -191,6 +193,70 @@ void testOmelyan2MoreAccurateThanVerlet(Platform& platform) {
                                               RigidBodyIntegrator::Omelyan2), reference);
     std::cout << "position error at 1 fs: Verlet " << verlet << " nm, Omelyan2 " << omelyan << " nm" << std::endl;
     check(omelyan < verlet/4, message("position errors at 1 fs: Verlet ", verlet, " nm, Omelyan2 ", omelyan, " nm"));
+}
+
+/**
+ * One step of each splitting on a free particle in the isotropic harmonic trap U = k |x|^2/2 is the
+ * product of its kicks (v -= c dt (k/m) x) and drifts (x += d dt v), with the coefficients of the
+ * papers that define the schemes computed here from their closed forms:
+ * - Verlet: kick 1/2, drift 1, kick 1/2;
+ * - Omelyan2 (Omelyan, Mryglod and Folk, Phys. Rev. E 65, 056706 (2002), the velocity form of the
+ *   optimized two-stage scheme): kick lambda, drift 1/2, kick 1 - 2 lambda, drift 1/2, kick lambda,
+ *   lambda = 1/2 - (2 sqrt(326) + 36)^(1/3)/12 + 1/(6 (2 sqrt(326) + 36)^(1/3));
+ * - Yoshida4 (H. Yoshida, Phys. Lett. A 150, 262 (1990)): Verlet steps of w1, w0, w1 times dt with
+ *   w1 = 1/(2 - 2^(1/3)), w0 = 1 - 2 w1.
+ * Position and velocity after one step to 1e-12 relative (1e-5 where forces are single precision).
+ * A wrong coefficient that leaves a scheme symmetric and of its order (Omelyan2 with lambda = 0.2 is
+ * still second order and more accurate than Verlet) passes the order tests and fails this one.
+ * Omelyan4's coefficients are roots of polynomials given only numerically in the paper; its fourth
+ * order is what testOrder checks.
+ */
+void testHarmonicStepMap(Platform& platform, RigidBodyIntegrator::Splitting splitting) {
+    const double mass = 2.0, k = 3000.0, dt = 0.01;  // omega dt = 0.39
+    System system;
+    system.addParticle(mass);
+    CustomExternalForce* trap = new CustomExternalForce("0.5*k*(x*x + y*y + z*z)");
+    trap->addGlobalParameter("k", k);
+    trap->addParticle(0);
+    system.addForce(trap);
+    RigidBodyIntegrator integrator(dt, vector<vector<int> >());
+    integrator.setSplitting(splitting);
+    Context context(system, integrator, platform, platformProperties);
+    const Vec3 x0(0.3, -0.2, 0.1), v0(1.5, 0.4, -2.0);
+    context.setPositions({x0});
+    context.setVelocities({v0});
+    integrator.step(1);
+    State state = context.getState(State::Positions | State::Velocities);
+
+    // The expected map, stage by stage: (kick, drift) pairs, then the closing kick.
+    vector<std::pair<double, double> > stages;
+    double closingKick = 0.5;
+    if (splitting == RigidBodyIntegrator::Verlet)
+        stages = {{0.5, 1.0}};
+    else if (splitting == RigidBodyIntegrator::Omelyan2) {
+        const double root = cbrt(2*sqrt(326.0) + 36), lambda = 0.5 - root/12 + 1/(6*root);
+        stages = {{lambda, 0.5}, {1 - 2*lambda, 0.5}};
+        closingKick = lambda;
+    }
+    else {
+        const double w1 = 1/(2 - cbrt(2.0)), w0 = 1 - 2*w1;
+        stages = {{0.5*w1, w1}, {0.5*(w1 + w0), w0}, {0.5*(w0 + w1), w1}};
+        closingKick = 0.5*w1;
+    }
+    Vec3 x = x0, v = v0;
+    for (auto& stage : stages) {
+        v -= x*(stage.first*dt*k/mass);
+        x += v*(stage.second*dt);
+    }
+    v -= x*(closingKick*dt*k/mass);
+    const auto precision = platformProperties.find("Precision");
+    const bool singleForces = precision != platformProperties.end() && precision->second != "double";
+    const double tolerance = (singleForces ? 1e-5 : 1e-12);
+    const double positionError = (state.getPositions()[0] - x).dot(state.getPositions()[0] - x);
+    const double velocityError = (state.getVelocities()[0] - v).dot(state.getVelocities()[0] - v);
+    string report = message(splittingName(splitting), " on a harmonic trap: position off by ", sqrt(positionError), " nm of ",
+                            sqrt(x.dot(x)), ", velocity by ", sqrt(velocityError), " of ", sqrt(v.dot(v)));
+    check(sqrt(positionError) < tolerance*sqrt(x.dot(x)) && sqrt(velocityError) < tolerance*sqrt(v.dot(v)), report);
 }
 
 void testNoSquishAgreesWithExact(Platform& platform) {
@@ -557,6 +623,9 @@ int runPlatformTests(Platform& platform) {
         {"bad input", [&]() { testBadInput(platform); }},
         {"Yoshida4 fourth order with a constraint", [&]() { testYoshida4FourthOrderWithConstraints(platform); }},
     };
+    for (RigidBodyIntegrator::Splitting splitting : {RigidBodyIntegrator::Verlet, RigidBodyIntegrator::Omelyan2, RigidBodyIntegrator::Yoshida4})
+        tests.push_back({"one step on a harmonic trap (" + splittingName(splitting) + ")",
+                         [&platform, splitting]() { testHarmonicStepMap(platform, splitting); }});
     for (RigidBodyIntegrator::Splitting splitting : allSplittings) {
         string name = splittingName(splitting);
         auto add = [&](const string& what, const std::function<void()>& test) {

@@ -1,5 +1,5 @@
 """Stability stress tests of RigidBodyIntegrator: the fast subset of benchmarks/stress.py, on small
-versions of its scenarios (built in stress_systems.py). Every run is checked for
+versions of its scenarios (built in openmmrigid.testing.stress). Every run is checked for
 
 - finiteness: no NaN or infinity in positions, velocities or energy, and no exception;
 - rigidity: no distance within a body changes by more than 1e-12 nm (absolute: the bodies are 0.1
@@ -20,7 +20,7 @@ import numpy as np
 import openmm.unit as unit
 import pytest
 
-import stress_systems as stress
+import openmmrigid.testing.stress as stress
 import systems
 
 PLATFORMS = ["Reference", "CPU"]
