@@ -18,8 +18,6 @@ among free particles (Yoshida4 fourth order with them) are tested in C++, tests/
 on the Reference, CPU and OpenCL platforms.
 """
 
-import copy
-import pickle
 
 import numpy as np
 import openmm
@@ -320,30 +318,13 @@ def test_unknown_splitting():
     assert integrator.getSplitting() == RigidBodyIntegrator.Omelyan2
 
 
-def test_docstrings():
-    assert "setSplitting" in RigidBodyIntegrator.__doc__ and "Omelyan" in RigidBodyIntegrator.__doc__
-    assert "0.1931833275037836" in RigidBodyIntegrator.setSplitting.__doc__
-    assert "Raises" in RigidBodyIntegrator.setSplitting.__doc__
-    assert "Returns" in RigidBodyIntegrator.getNumForceEvaluations.__doc__
-
-
-def copy_of(integrator, how):
-    if how == "pickle":
-        return pickle.loads(pickle.dumps(integrator))
-    if how == "deepcopy":
-        return copy.deepcopy(integrator)
-    if how == "clone":
-        return openmm.XmlSerializer.clone(integrator)
-    return openmm.XmlSerializer.deserialize(openmm.XmlSerializer.serialize(integrator))
-
-
-@pytest.mark.parametrize("how", ["pickle", "deepcopy", "clone", "xml"])
+@pytest.mark.parametrize("how", systems.COPY_METHODS)
 @pytest.mark.parametrize("name", list(SPLITTINGS))
 def test_copies_keep_the_splitting(name, how):
     original = RigidBodyIntegrator(0.002, [[0, 1, 2]])
     original.setSplitting(SPLITTINGS[name])
     original.setRotationMethod(RigidBodyIntegrator.NoSquish)
-    duplicate = copy_of(original, how)
+    duplicate = systems.copy_integrator(original, how)
     assert type(duplicate) is RigidBodyIntegrator
     assert duplicate.getSplitting() == SPLITTINGS[name]
     assert duplicate.getNumForceEvaluations() == FORCE_EVALUATIONS[name]

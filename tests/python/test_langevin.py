@@ -279,13 +279,6 @@ def test_units(arguments):
         RigidBodyLangevinIntegrator(300 * unit.nanometer, 1, 0.002)
 
 
-def test_docstrings():
-    for name in ("getTemperature", "setTemperature", "getFriction", "setFriction", "setRandomNumberSeed"):
-        assert getattr(RigidBodyLangevinIntegrator, name).__doc__
-    assert "Davidchack" in RigidBodyLangevinIntegrator.__doc__ and "BAOAB" in RigidBodyLangevinIntegrator.__doc__
-    assert "kJ/mol" in RigidBodyLangevinIntegrator.getRotationalKineticEnergy.__doc__
-
-
 BODY_CHOICES = {"found": None, "explicit": EXPLICIT_BODIES, "none": []}
 
 
