@@ -47,7 +47,7 @@ def _normalized(text):
 def _doxygenComments(header):
     """{declared name: [first sentence of each Doxygen comment declaring it]} for one header, and the
     comment right before each class, under the class's name."""
-    source = (_includeFolder() / HEADERS[header]).read_text()
+    source = (_includeFolder() / HEADERS[header]).read_text(encoding="utf-8")
     found = {}
     for comment, declaration in re.findall(r"/\*\*(.*?)\*/\s*([^;{]*)", source, re.DOTALL):
         text = "\n".join(line.strip().lstrip("*").strip() for line in comment.splitlines())
