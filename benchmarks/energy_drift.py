@@ -210,7 +210,7 @@ def buildBox(key, molecules, ewaldTolerance):
     topology, positions, system = openmmrigid.testing.waterBox(
         key, molecules=molecules, forceField=MODELS[key].forceField, nonbondedCutoff=CUTOFF*unit.nanometer,
         ewaldErrorTolerance=ewaldTolerance)
-    masses = np.array([system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles())])
+    masses = openmmrigid.testing.particleMasses(system)
     bodies = np.array([[atom.index for atom in residue.atoms() if masses[atom.index] > 0]
                        for residue in topology.residues()])
     removesMotion = any(isinstance(system.getForce(i), openmm.CMMotionRemover) for i in range(system.getNumForces()))

@@ -165,7 +165,7 @@ def main():
     for model in args.models:
         stamp(f"{model}: building and equilibrating {args.waters} waters")
         system, state = equilibratedBox(model, args.waters, platform, properties)
-        masses = np.array([system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles())])
+        masses = openmmrigid.testing.particleMasses(system)
         molecules = np.flatnonzero(masses > 0).reshape(-1, 3)
         for friction in args.frictions:
             for stepFs in args.steps:

@@ -80,8 +80,7 @@ class Molecules:
             self.atoms.append(massive)
             self.oxygens.extend(atom.index for atom in residue.atoms() if atom.element == app.element.oxygen)
         self.atoms = np.array(self.atoms)                         # (N, 3): O, H, H
-        self.particleMasses = np.array([system.getParticleMass(i).value_in_unit(unit.dalton)
-                                        for i in range(system.getNumParticles())])
+        self.particleMasses = openmmrigid.testing.particleMasses(system)
         self.masses = self.particleMasses[self.atoms]
         self.oxygens = np.array(self.oxygens)
         self.count = len(self.atoms)

@@ -151,7 +151,7 @@ def main():
     started = time.time()
     stamp("building and equilibrating the water box (LangevinMiddleIntegrator + SETTLE, 10 ps)")
     system, state = equilibratedBox(args.edge, platform, properties)
-    masses = np.array([system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles())])
+    masses = openmmrigid.testing.particleMasses(system)
     molecules = np.arange(system.getNumParticles()).reshape(-1, 3)
     stamp(f"{len(molecules)} waters; {args.time:g} ps per run after {min(2.0, args.time):g} ps of its own equilibration")
     rows = []

@@ -74,7 +74,7 @@ def test_barostat_moves_keep_bodies_rigid(platformName):
 @pytest.mark.parametrize("platformName", PLATFORMS)
 def test_cm_motion_remover(platformName):
     system, positions = water_box(cmMotionRemover=True)
-    masses = np.array([system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles())])
+    masses = openmmrigid.testing.particleMasses(system)
     integrator = openmmrigid.RigidBodyIntegrator(0.002)
     context = minimized_context(system, positions, integrator, platformName)
     # Give the whole box a drift the remover must take out.
@@ -167,7 +167,7 @@ def test_set_positions_and_velocities_are_projected(platformName):
     system, positions = water_box()
     for force in list(system.getForces()):
         system.removeForce(0)
-    masses = np.array([system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles())])
+    masses = openmmrigid.testing.particleMasses(system)
     integrator = openmmrigid.RigidBodyIntegrator(0.001)
     context = make_context(system, integrator, platformName)
     rng = np.random.default_rng(3)

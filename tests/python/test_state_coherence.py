@@ -32,6 +32,7 @@ import pytest
 
 import systems
 from openmmrigid import RigidBodyIntegrator, RigidBodyLangevinIntegrator
+from openmmrigid.testing import particleMasses
 from systems import make_context, positions_of, velocities_of
 
 PLATFORMS = systems.PLATFORMS
@@ -119,10 +120,6 @@ def max_difference(a, b):
 
 def minimum_image(difference, edge=EDGE):
     return difference - edge * np.round(difference / edge)
-
-
-def masses_of(system):
-    return np.array([system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles())])
 
 
 def body_distances(positions, bodies):
@@ -394,7 +391,7 @@ def test_state_after_set_velocities_is_projected(water, platformName):
     integrator = rigid_integrator()
     context = started(water.system, integrator, platformName, water.positions, water.velocities)
     integrator.step(1)
-    masses = masses_of(water.system)
+    masses = particleMasses(water.system)
     rng = np.random.default_rng(17)
     thermal = rng.normal(size=water.positions.shape) * np.sqrt(systems.BOLTZMANN * 300.0 / masses)[:, None]
     context.setVelocities(thermal)

@@ -231,7 +231,8 @@ def rigidMoleculeBox(molecule, count, density, seed, cutoff=1.0, switchWidth=0.1
     return system, positions.reshape(-1, 3), bodies
 
 
-def _particleMasses(system):
+def particleMasses(system):
+    """The System's particle masses in amu, as a numpy array (0 for virtual sites)."""
     return np.array([system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles())])
 
 
@@ -244,7 +245,7 @@ def equilibrateByRedraws(context, integrator, temperature, picoseconds, every=0.
     angular momentum of independent Maxwell-Boltzmann particle velocities are Gaussian with
     covariances kT M and kT I, so each redraw is an exact draw from the bodies' Boltzmann distribution.
     """
-    masses = _particleMasses(context.getSystem())
+    masses = particleMasses(context.getSystem())
     dt = integrator.getStepSize().value_in_unit(unit.picosecond)
     interval = max(1, int(round(every/dt)))
     velocityUnit = unit.nanometer/unit.picosecond
@@ -262,7 +263,7 @@ def compressBox(context, integrator, bodies, edge, temperature, factor=0.98, pic
     """Shrink a cubic box to `edge` (nm), `factor` at a time, moving the bodies' centres of mass with it
     (their shapes unchanged), with equilibrateByRedraws() for picosecondsPerStage after each stage.
     Returns the number of stages."""
-    masses = _particleMasses(context.getSystem())
+    masses = particleMasses(context.getSystem())
     bodies = np.array(bodies)
     bodyMasses = masses[bodies][:, :, None]
     current = context.getState().getPeriodicBoxVectors()[0][0].value_in_unit(unit.nanometer)
