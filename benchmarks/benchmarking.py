@@ -27,6 +27,7 @@ import numpy as np
 import openmm
 
 import openmmrigid
+from openmmrigid.testing.stress import block_drift
 
 ROOT = Path(__file__).resolve().parent.parent
 RESULTS = ROOT/"benchmarks"/"results"     # logs, CSV and plots of every run (git ignores it)
@@ -313,15 +314,10 @@ def molecularKineticEnergies(velocities, masses, molecules):
 
 def slopeError(times, values, blocks=10):
     """Standard error of the slope of a time series, from the line through the means of `blocks`
-    consecutive blocks (the fit to every sample would understate it for correlated samples)."""
-    n = len(times)//blocks*blocks
-    if n < 2*blocks:
+    consecutive blocks (openmmrigid.testing.stress.block_drift; NaN with fewer than two samples a block)."""
+    if len(times)//blocks*blocks < 2*blocks:
         return float("nan")
-    t = np.asarray(times)[:n].reshape(blocks, -1).mean(axis=1)
-    e = np.asarray(values)[:n].reshape(blocks, -1).mean(axis=1)
-    slope, intercept = np.polyfit(t, e, 1)
-    residual = e - (slope*t + intercept)
-    return float(np.sqrt(residual @ residual/(blocks - 2)/np.sum((t - t.mean())**2)))
+    return float(block_drift(times, values, blocks)[1])
 
 
 def radialDistribution(frames, boxes, largest, width):

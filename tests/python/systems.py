@@ -8,12 +8,12 @@ build on them), re-exported here:
 - water_box(): a small periodic box of TIP3P or TIP4P-Ew water from openmm.app (PME), minimised,
   with Maxwell-Boltzmann velocities.
 - rigid_motion(): the exact free motion of a set of bodies, from openmmrigid.FreeRotor.
-- energy_drift(), positions_of(), velocities_of(), platform_and_properties().
+- energy_drift() and block_drift(), positions_of(), velocities_of(), platform_and_properties().
 
 Defined here: the platforms to test (PLATFORMS, GPU_PLATFORMS), minimize() and make_context(),
 mixed_system() (alanine dipeptide, flexible with HBonds constraints, in rigid TIP3P water with a
 rigid benzene, a rigid linear CO2, a Na+ ion as a single-particle body and a free Cl- ion),
-block_drift() and run_energies(), and the copies of an integrator (COPY_METHODS, copy_integrator()).
+run_energies(), and the copies of an integrator (COPY_METHODS, copy_integrator()).
 """
 
 import io
@@ -28,7 +28,7 @@ import openmmrigid
 # benchmarks/stress.py); the tests use them from there.
 from openmmrigid.testing import randomRotation
 from openmmrigid.testing.stress import (BOLTZMANN, KJ_PER_MOL_PER_NM, WATER_MODELS, Cluster, RigidMotion,  # noqa: F401
-                                        Solvated, _prepare, cluster, energy_drift, platform_and_properties,
+                                        Solvated, _prepare, block_drift, cluster, energy_drift, platform_and_properties,
                                         positions_of, rigid_motion, velocities_of, water_box)
 
 
@@ -198,18 +198,6 @@ def mixed_system(seed=11, size=2.2, cutoff=0.8):
 # ------------------------------------------------------------------------------------------------
 # Measurements
 # ------------------------------------------------------------------------------------------------
-
-
-def block_drift(times, energies, blocks):
-    """The drift of energies against times from the means of `blocks` consecutive blocks: slope and
-    standard error of the line through the block means. Block means are nearly independent when a
-    block is longer than the correlation time of the energy fluctuations, so this standard error,
-    unlike that of a fit to every sample, does not understate the uncertainty of the slope."""
-    n = len(times) // blocks * blocks
-    blockTimes = np.asarray(times[:n], dtype=float).reshape(blocks, -1).mean(axis=1)
-    blockEnergies = np.asarray(energies[:n], dtype=float).reshape(blocks, -1).mean(axis=1)
-    slope, standardError, _ = energy_drift(blockTimes, blockEnergies)
-    return slope, standardError
 
 
 def run_energies(context, integrator, steps, interval):

@@ -338,6 +338,18 @@ def energy_drift(times, energies):
     return slope, standardError, np.sqrt(np.mean(residual ** 2))
 
 
+def block_drift(times, energies, blocks):
+    """The drift of energies against times from the means of `blocks` consecutive blocks: slope and
+    standard error of the line through the block means. Block means are nearly independent when a
+    block is longer than the correlation time of the energy fluctuations, so this standard error,
+    unlike that of a fit to every sample, does not understate the uncertainty of the slope."""
+    n = len(times) // blocks * blocks
+    blockTimes = np.asarray(times[:n], dtype=float).reshape(blocks, -1).mean(axis=1)
+    blockEnergies = np.asarray(energies[:n], dtype=float).reshape(blocks, -1).mean(axis=1)
+    slope, standardError, _ = energy_drift(blockTimes, blockEnergies)
+    return slope, standardError
+
+
 def positions_of(context):
     return context.getState(getPositions=True).getPositions(asNumpy=True).value_in_unit(unit.nanometer)
 
