@@ -212,6 +212,16 @@ def _acceptingQuantities(method, parameters):
     return converting
 
 
+def _withQuantityArguments(key, method, overloads):
+    """The method converting the Quantities QUANTITY_ARGUMENTS lists for key, with the notes added to
+    each overload's parsed docstring (the method itself where it lists none)."""
+    if key not in QUANTITY_ARGUMENTS:
+        return method
+    for parsed in overloads:
+        _noteArguments(parsed, QUANTITY_ARGUMENTS[key])
+    return _acceptingQuantities(method, QUANTITY_ARGUMENTS[key])
+
+
 def _returningQuantity(method, resultUnit):
     @functools.wraps(method)
     def converting(self, *args, **kwargs):
@@ -267,12 +277,8 @@ def applyToClasses(*classes):
             if name.startswith("_"):
                 continue
             parsed = [Parsed(block) for block in _overloads(member.__doc__)]
-            function = member
             key = (cls.__name__, name)
-            if key in QUANTITY_ARGUMENTS:
-                function = _acceptingQuantities(member, QUANTITY_ARGUMENTS[key])
-                for block in parsed:
-                    _noteArguments(block, QUANTITY_ARGUMENTS[key])
+            function = _withQuantityArguments(key, member, parsed)
             if key in QUANTITY_RESULTS:
                 function = _returningQuantity(member, QUANTITY_RESULTS[key])
                 for block in parsed:
@@ -283,13 +289,8 @@ def applyToClasses(*classes):
 
 
 def _applyToConstructor(cls, constructor):
-    key = (cls.__name__, "__init__")
     overloads = [Parsed(block) for block in _overloads(constructor.__doc__)]
-    function = constructor
-    if key in QUANTITY_ARGUMENTS:
-        function = _acceptingQuantities(constructor, QUANTITY_ARGUMENTS[key])
-        for block in overloads:
-            _noteArguments(block, QUANTITY_ARGUMENTS[key])
+    function = _withQuantityArguments((cls.__name__, "__init__"), constructor, overloads)
     function.__doc__ = _constructorSummary(cls.__name__, overloads)
     cls.__init__ = function
     cls.__doc__ = cls.__doc__ + "\n\n" + _mergedConstructorSections(overloads)
