@@ -69,8 +69,7 @@ RigidBodyLangevinIntegrator* asRigidBodyLangevinIntegrator(OpenMM::Integrator* i
 } // namespace Python
 } // namespace OpenMMRigid
 
-// Which platforms have the kernels (openmmrigid.getSupportedPlatforms()), and the message for those
-// that have none (called once the plugins are loaded, by openmmrigid/integrator.py).
+// Which platforms have the kernels (openmmrigid.getSupportedPlatforms()).
 %{
 #include "PlatformSupport.h"
 %}
@@ -81,5 +80,4 @@ RigidBodyLangevinIntegrator* asRigidBodyLangevinIntegrator(OpenMM::Integrator* i
         PyList_SetItem($result, i, PyUnicode_FromString(names[i].c_str()));
 }
 %typemap(doctype) std::vector<std::string> "list of str"
-%rename(_explainUnsupportedPlatforms) OpenMMRigid::explainUnsupportedPlatforms;
 %include "PlatformSupport.h"

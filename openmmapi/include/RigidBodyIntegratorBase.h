@@ -4,6 +4,7 @@
 #include "RigidBodyOptions.h"
 #include "openmm/Integrator.h"
 #include "openmm/Kernel.h"
+#include "openmm/Vec3.h"
 #include "internal/StepSequence.h"
 #include "internal/windowsExportRigid.h"
 #include <iosfwd>
@@ -53,6 +54,14 @@ public:
      * @throws OpenMMException if the value is not a RotationMethod
      */
     void setRotationMethod(RotationMethod method);
+#ifndef SWIG
+    /**
+     * Set the size of each time step, in ps (Integrator::setStepSize(), which Python calls as it is).
+     *
+     * @throws OpenMMException if the size is not a finite number
+     */
+    void setStepSize(double size) override;
+#endif
     /** Get whether the bodies were given explicitly (rather than found from the System's constraints). */
     bool hasExplicitBodies() const {
         return explicitBodies;
@@ -206,6 +215,8 @@ private:
     bool explicitBodies;
     RotationMethod rotationMethod;
     bool bound, forcesAreValid, needsProjection;
+    /** The periodic box of the last force evaluation: setPeriodicBoxVectors() sends the integrator no notice. */
+    OpenMM::Vec3 forcesBox[3];
     double loadedVelocityKick;
     OpenMM::Kernel kernel;
     std::unique_ptr<RigidBodySystem> topology;

@@ -8,6 +8,7 @@
 #include "openmm/internal/ContextImpl.h"
 #include "openmm/reference/SimTKOpenMMRealType.h"
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <istream>
 #include <ostream>
@@ -33,6 +34,12 @@ RigidBodyIntegratorBase::RigidBodyIntegratorBase(const string& className, double
         for (int p : bodies[b])
             if (p < 0)
                 throw OpenMMException(className + ": body " + to_string(b) + " lists the negative particle index " + to_string(p));
+}
+
+void RigidBodyIntegratorBase::setStepSize(double size) {
+    if (!isfinite(size))
+        throw OpenMMException(className + ": the step size is " + to_string(size) + "; it must be a finite number of ps");
+    Integrator::setStepSize(size);
 }
 
 void RigidBodyIntegratorBase::setRotationMethod(RotationMethod method) {
@@ -128,7 +135,7 @@ void RigidBodyIntegratorBase::initialize(ContextImpl& contextRef) {
             kernel = context->getPlatform().createKernel(IntegrateRigidBodyStepKernel::Name(), contextRef);
         }
         catch (const OpenMMException& e) {
-            // A platform without the kernels (see explainUnsupportedPlatforms()), or one that cannot make them.
+            // A platform whose plugin cannot make the kernel (an OpenCL device without what it needs, say).
             throw OpenMMException(className + ": " + e.what());
         }
         kernel.getAs<IntegrateRigidBodyStepKernel>().initialize(contextRef, *topology);
@@ -316,6 +323,11 @@ void RigidBodyIntegratorBase::step(int steps) {
             forcesAreValid = false;
             applyLoadedVelocityKick();
         }
+        // A new box (setPeriodicBoxVectors() between steps, without new positions) sends no notice.
+        Vec3 box[3];
+        context->getPeriodicBoxVectors(box[0], box[1], box[2]);
+        if (box[0] != forcesBox[0] || box[1] != forcesBox[1] || box[2] != forcesBox[2])
+            forcesAreValid = false;
         if (!forcesAreValid || context->getLastForceGroups() != getIntegrationForceGroups())
             context->calcForcesAndEnergy(true, false, getIntegrationForceGroups());
         try {
@@ -330,6 +342,8 @@ void RigidBodyIntegratorBase::step(int steps) {
             throw;
         }
         forcesAreValid = true;
+        for (int k = 0; k < 3; k++)
+            forcesBox[k] = box[k];
     }
 }
 

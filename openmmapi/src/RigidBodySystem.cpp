@@ -53,10 +53,16 @@ void RigidBodySystem::setShape(int b, const vector<Vector3>& centred) {
         moment = {0.0, 0.0, 0.0};
     }
     else {
-        // The smallest principal moment of a linear molecule computed from coordinates is rounding
-        // noise: if the classification takes it for zero, the molecule is put on its axis exactly.
-        RigidShape principal;
-        if (rigidClassifyMoments(moment.data(), &principal) == RigidStatusOk && principal.kind == RigidKindLinear)
+        // A molecule read from a file, a template or a minimizer is never exactly linear: one whose
+        // particles all lie near the axis of least moment (within LinearTolerance, and within 1 % of
+        // its reach along the axis) is put on that axis exactly, so that it is a linear body rather
+        // than an asymmetric top with a tiny moment that spins too fast for any step.
+        double offAxis = 0.0, alongAxis = 0.0;
+        for (int i = 0; i < n; i++) {
+            offAxis = max(offAxis, sqrt(coordinates[i][1]*coordinates[i][1] + coordinates[i][2]*coordinates[i][2]));
+            alongAxis = max(alongAxis, fabs(coordinates[i][0]));
+        }
+        if (offAxis <= LinearTolerance && offAxis <= 0.01*alongAxis)
             for (int i = 0; i < n; i++)
                 coordinates[i][1] = coordinates[i][2] = 0.0;
         for (int k = 0; k < 3; k++) {
@@ -69,6 +75,12 @@ void RigidBodySystem::setShape(int b, const vector<Vector3>& centred) {
     if (rigidClassifyMoments(moment.data(), &shape) != RigidStatusOk)
         throw OpenMMException(className + ": body " + to_string(b) + " has principal moments " + to_string(moment[0]) + ", " +
                 to_string(moment[1]) + ", " + to_string(moment[2]) + ", which no rigid body has");
+    longestLink[b] = spanningTree(b, [&](int i, int j) {
+        double sum = 0.0;
+        for (int k = 0; k < 3; k++)
+            sum += (coordinates[i][k] - coordinates[j][k])*(coordinates[i][k] - coordinates[j][k]);
+        return sqrt(sum);
+    }, &assemblyOrder[bodyStart[b]], &assemblyNeighbour[bodyStart[b]]);
     shapeKnown[b] = 1;
 }
 
@@ -131,21 +143,97 @@ Vector3 RigidBodySystem::centreOfMass(int b, const vector<Vec3>& values) const {
     return massWeightedMean(masses, members, getBodySize(b), bodyMass[b], [&](int i) -> const Vec3& { return values[members[i]]; });
 }
 
+namespace {
+
+/**
+ * r moved by whole box vectors to its image nearest anchor. The box is in OpenMM's reduced form: c,
+ * then b, then a removes each component in turn. r comes back bit for bit if it is already nearest.
+ */
+Vec3 imageNearest(Vec3 r, const Vec3& anchor, const StepGeometry& geometry) {
+    for (int k = 2; k >= 0; k--) {
+        double shift = round((r[k] - anchor[k])/geometry.box[k][k]);
+        if (shift != 0.0)
+            r -= geometry.box[k]*shift;
+    }
+    return r;
+}
+
+} // namespace
+
+double RigidBodySystem::spanningTree(int b, const function<double(int, int)>& distance, int* order, int* neighbour) const {
+    // Prim's algorithm: each round places the unplaced particle with the shortest link to a placed
+    // one. A link that is not finite is never the shortest; such a particle hangs on the first one.
+    const int n = getBodySize(b);
+    vector<double> shortest(n, numeric_limits<double>::infinity());
+    vector<char> placed(n, 0);
+    for (int i = 0; i < n; i++)
+        neighbour[i] = 0;
+    neighbour[0] = -1;
+    order[0] = 0;
+    placed[0] = 1;
+    double longest = 0.0;
+    for (int k = 1, last = 0; k < n; k++) {
+        int next = -1;
+        for (int j = 0; j < n; j++) {
+            if (placed[j])
+                continue;
+            const double d = distance(last, j);
+            if (d < shortest[j]) {
+                shortest[j] = d;
+                neighbour[j] = last;
+            }
+            if (next < 0 || shortest[j] < shortest[next])
+                next = j;
+        }
+        placed[next] = 1;
+        order[k] = next;
+        if (isfinite(shortest[next]))
+            longest = max(longest, shortest[next]);
+        last = next;
+    }
+    return longest;
+}
+
 void RigidBodySystem::assemble(int b, const vector<Vec3>& positions, const StepGeometry& geometry, Vec3* whole) const {
-    // The box is in OpenMM's reduced form: c, then b, then a removes each component in turn.
     const int n = getBodySize(b);
     const int* members = getBodyParticles(b);
-    const Vec3& first = positions[members[0]];
-    for (int i = 0; i < n; i++) {
-        Vec3 r = positions[members[i]];
-        if (geometry.periodic && i > 0) {
-            for (int k = 2; k >= 0; k--) {
-                double shift = round((r[k] - first[k])/geometry.box[k][k]);
-                if (shift != 0.0)
-                    r -= geometry.box[k]*shift;
-            }
+    if (!geometry.periodic || n == 1) {
+        for (int i = 0; i < n; i++)
+            whole[i] = positions[members[i]];
+        return;
+    }
+    const int* order;
+    const int* neighbour;
+    vector<int> ownOrder, ownNeighbour;
+    if (shapeKnown[b]) {
+        // The body's own links: the same tree whatever the positions, checked against this box.
+        order = &assemblyOrder[bodyStart[b]];
+        neighbour = &assemblyNeighbour[bodyStart[b]];
+        const double halfWidth = 0.5*min(geometry.box[0][0], min(geometry.box[1][1], geometry.box[2][2]));
+        if (longestLink[b] >= halfWidth) {
+            ostringstream message;
+            message << className << ": body " << b << " cannot be assembled from periodic images unambiguously: some of its "
+                    "particles are joined to the rest by no chain of links shorter than " << longestLink[b] << " nm, and half "
+                    "the periodic box's smallest width is " << halfWidth << " nm; use a larger box";
+            throw OpenMMException(message.str());
         }
-        whole[i] = r;
+    }
+    else {
+        // No shape yet: the links are the minimum-image distances in these positions.
+        ownOrder.resize(n);
+        ownNeighbour.resize(n);
+        spanningTree(b, [&](int i, int j) {
+            const Vec3& anchor = positions[members[i]];
+            const Vec3 d = imageNearest(positions[members[j]], anchor, geometry) - anchor;
+            return sqrt(d.dot(d));
+        }, ownOrder.data(), ownNeighbour.data());
+        order = ownOrder.data();
+        neighbour = ownNeighbour.data();
+    }
+    whole[0] = positions[members[0]];
+    for (int k = 1; k < n; k++) {
+        const int i = order[k];
+        whole[i] = imageNearest(positions[members[i]], whole[neighbour[i]], geometry);
     }
 }
 
@@ -196,6 +284,9 @@ void RigidBodySystem::addBody(const vector<int>& members) {
     particles.insert(particles.end(), members.begin(), members.end());
     bodyStart.push_back(particles.size());
     bodyCoordinates.resize(particles.size(), Vector3{0.0, 0.0, 0.0});
+    assemblyOrder.resize(particles.size(), 0);
+    assemblyNeighbour.resize(particles.size(), -1);
+    longestLink.push_back(0.0);
     bodyMass.push_back(0.0);
     RigidShape point = {RigidKindPoint, -1, {0.0, 0.0, 0.0}};
     shapes.push_back(point);

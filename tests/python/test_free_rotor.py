@@ -786,6 +786,13 @@ def test_bad_constructor_input(arguments, pattern):
         FreeRotor(moments, omega, attitude)
 
 
+def test_unequal_linear_moments_message_tells_them_apart():
+    """A linear rotor needs its two non-zero moments equal; moments that differ only past the sixth
+    digit are printed in full, so that the message shows the difference."""
+    with pytest.raises(openmm.OpenMMException, match=r"got 1\.0000001\d* and 1\b"):
+        FreeRotor((0.0, 1.0000001, 1.0), (1, 1, 1))
+
+
 @pytest.mark.parametrize("representation", ["bogus", "", "theta", "Theta-Series", None, 1])
 def test_unknown_representation(representation):
     with pytest.raises(openmm.OpenMMException, match=r"(?i)representation"):

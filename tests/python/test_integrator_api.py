@@ -193,6 +193,22 @@ def test_bad_bodies_found_with_the_system():
             openmm.Context(system, RigidBodyIntegrator(0.001, bodies), platform("Reference"))
 
 
+@pytest.mark.parametrize("integratorClass", [RigidBodyIntegrator, openmmrigid.RigidBodyLangevinIntegrator])
+@pytest.mark.parametrize("bad", [float("nan"), float("inf"), -float("inf")], ids=str)
+def test_non_finite_step_size_is_a_bad_argument(integratorClass, bad):
+    """A step size that is not a number is refused where it is given, naming the class, not reported
+    later as an unstable simulation; the integrator keeps its step."""
+    leading = () if integratorClass is RigidBodyIntegrator else (300.0, 1.0)
+    with pytest.raises(openmm.OpenMMException, match=f"{integratorClass.__name__}: the step size is .*finite"):
+        integratorClass(*leading, bad)
+    integrator = integratorClass(*leading, 0.002)
+    with pytest.raises(openmm.OpenMMException, match=f"{integratorClass.__name__}: the step size is .*finite"):
+        integrator.setStepSize(bad)
+    with pytest.raises(openmm.OpenMMException, match=f"{integratorClass.__name__}: the step size"):
+        integrator.setStepSize(bad * unit.femtoseconds)
+    assert integrator.getStepSize() == 0.002 * unit.picoseconds
+
+
 def test_rotation_method():
     integrator = RigidBodyIntegrator(0.001)
     assert (RigidBodyIntegrator.Exact, RigidBodyIntegrator.NoSquish) == (0, 1)
@@ -308,6 +324,17 @@ def test_kernels_load_once():
             pass  # platform not available
     context, integrator = explicit_context("Reference")
     integrator.step(2)
+
+
+def test_only_platforms_with_kernels_claim_them():
+    # OpenMM chooses the default platform among those that claim every kernel: a platform that
+    # claimed ours without having it (an explaining stand-in) would take a Context made without a
+    # named platform away from the ones that can run it (TestPlatformSupport makes such a platform).
+    supported = openmmrigid.getSupportedPlatforms()
+    assert "Reference" in supported and "CPU" in supported
+    for i in range(openmm.Platform.getNumPlatforms()):
+        platform = openmm.Platform.getPlatform(i)
+        assert platform.supportsKernels(["IntegrateRigidBodyStep"]) == (platform.getName() in supported)
 
 
 # ------------------------------------------------------------------------------------------------

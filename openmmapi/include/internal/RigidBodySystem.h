@@ -6,6 +6,7 @@
 #include "numerics/RigidCore.h"
 #include "openmm/System.h"
 #include "openmm/Vec3.h"
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -56,6 +57,14 @@ public:
      */
     RigidBodySystem(const OpenMM::System& system, const std::vector<std::vector<int> >& explicitBodies, bool useExplicit,
                     const std::string& className);
+    /**
+     * How far from a line, in nm, a body's particles may lie for the body to be linear: a body whose
+     * particles are all within this distance of its axis of least moment, and within 1 % of its reach
+     * along that axis, is put on the axis exactly when it takes its shape. 0.002 nm covers coordinates
+     * rounded to 0.001 nm (a .gro file; a PDB file's 1e-4 nm by far), and straightens a bend of at
+     * most about a degree in a triatomic molecule; a genuinely bent body lies farther off.
+     */
+    static constexpr double LinearTolerance = 0.002;
     /**
      * A constraint between two particles of one body (implied by its rigidity, checked against its
      * shape): its index in the System, the positions of its particles in the body's list, its length.
@@ -128,13 +137,21 @@ public:
      */
     void captureShapes(const std::vector<OpenMM::Vec3>& positions, const StepGeometry& geometry, bool strict);
     /**
-     * The positions of body b's particles, each at the periodic image nearest the body's first
-     * particle (a body is far smaller than half the box), so that a molecule split by the boundary is
-     * whole. A particle already nearest keeps its coordinates bit for bit.
+     * The positions of body b's particles, whole: the first particle where it is, and each other at
+     * the periodic image nearest a neighbour already placed, along a tree that joins every particle
+     * to the body by its shortest links (a minimum spanning tree: of the body's own shape once it has
+     * one, of the minimum-image distances in these positions before), so that a molecule split by the
+     * boundary is whole however far it reaches from its first particle. A particle already at the
+     * image nearest its neighbour keeps its coordinates bit for bit. A body that has a link as long as
+     * half the box's smallest width cannot be placed unambiguously: an OpenMMException names it.
      *
      * @param whole  on exit, getBodySize(b) positions in the body's order
      */
     void assemble(int b, const std::vector<OpenMM::Vec3>& positions, const StepGeometry& geometry, OpenMM::Vec3* whole) const;
+    /** The longest link of body b's assembly tree (see assemble()), in nm; 0 before it has its shape or for a single particle. */
+    double getLongestLink(int b) const {
+        return longestLink[b];
+    }
     /** The centre of mass sum_i m_i x_i / M of body b, with x_i = values[i] in the body's order. */
     Vector3 centreOfMass(int b, const OpenMM::Vec3* values) const;
     /** centreOfMass(b, values), with each x_i's offset from it in offsets (resized to the body's size). */
@@ -190,9 +207,19 @@ private:
     bool shapeBody(int b, const std::vector<OpenMM::Vec3>& positions, const StepGeometry& geometry, bool strict);
     /** Set body b's shape from coordinates about its centre of mass (any orientation): principal axes, moments, kind. */
     void setShape(int b, const std::vector<Vector3>& centred);
+    /**
+     * The order in which body b's particles are placed and the neighbour each is placed next to
+     * (positions in the body's list; the first particle has none): a minimum spanning tree, grown from
+     * the first particle, of the distance between particles i and j that distance(i, j) gives.
+     * Returns the longest link.
+     */
+    double spanningTree(int b, const std::function<double(int, int)>& distance, int* order, int* neighbour) const;
     std::string className;
     std::vector<int> bodyStart, particles;
     std::vector<Vector3> bodyCoordinates;
+    /** Parallel to particles: body b's particles in the order assemble() places them, and the neighbour each is placed at (-1 for the first). */
+    std::vector<int> assemblyOrder, assemblyNeighbour;
+    std::vector<double> longestLink;
     std::vector<double> bodyMass;
     std::vector<RigidShape> shapes;
     std::vector<char> shapeKnown, handednessOpen;

@@ -17,6 +17,7 @@
 #include "numerics/Matrix3.h"
 #include "numerics/RigidCore.h"
 #include <cmath>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 
@@ -136,6 +137,14 @@ private:
 
 namespace detail {
 
+/** x with every digit a double holds (17 significant), so that a message tells apart values that differ. */
+inline std::string fullPrecision(double x) {
+    std::ostringstream text;
+    text.precision(17);
+    text << x;
+    return text.str();
+}
+
 inline void toArray(const Matrix3& a, double b[3][3]) {
     for (int i = 0; i < 3; i++)
         for (int j = 0; j < 3; j++)
@@ -189,14 +198,14 @@ inline RigidShape FreeRotor::classify(const Vector3& moments) {
         for (int k = 0; k < 3; k++)
             if (!(moments[k] >= 0.0))
                 throw std::invalid_argument("FreeRotor: moment of inertia " + std::to_string(k) + " is " +
-                        std::to_string(moments[k]) + "; moments must be finite and non-negative");
+                        detail::fullPrecision(moments[k]) + "; moments must be finite and non-negative");
         break;
     case RigidStatusUnequalLinear:
         for (int k = 0; k < 3; k++)
             if (moments[k] <= rigidKindTolerance()*std::fmax(std::fmax(moments[0], moments[1]), moments[2]))
                 throw std::invalid_argument("FreeRotor: a rotor with a zero moment of inertia is linear and needs "
-                        "the other two moments equal; got " + std::to_string(moments[(k + 1)%3]) + " and " +
-                        std::to_string(moments[(k + 2)%3]));
+                        "the other two moments equal; got " + detail::fullPrecision(moments[(k + 1)%3]) + " and " +
+                        detail::fullPrecision(moments[(k + 2)%3]));
         break;
     default:
         throw std::invalid_argument("FreeRotor: more than one moment of inertia is zero");
@@ -214,7 +223,7 @@ inline void FreeRotor::requireInitialized(int status, int representation, double
     if (status == RigidStatusThetaOnSeparatrix)
         throw std::invalid_argument("FreeRotor: the theta-series representation does not exist on the separatrix (m = 1)");
     if (status == RigidStatusThetaNotConverged)
-        throw std::invalid_argument("FreeRotor: the theta series does not converge at m = " + std::to_string(m) +
+        throw std::invalid_argument("FreeRotor: the theta series does not converge at m = " + detail::fullPrecision(m) +
                 "; use the elliptic-integral representation this close to the separatrix");
     throw std::invalid_argument("FreeRotor: the rotor could not be built (status " + std::to_string(status) + ")");
 }
@@ -223,7 +232,7 @@ inline void FreeRotor::validate(const Vector3& moments, const Vector3& omega, co
     for (int k = 0; k < 3; k++) {
         if (!std::isfinite(moments[k]) || moments[k] < 0.0)
             throw std::invalid_argument("FreeRotor: moment of inertia " + std::to_string(k) + " is " +
-                    std::to_string(moments[k]) + "; moments must be finite and non-negative");
+                    detail::fullPrecision(moments[k]) + "; moments must be finite and non-negative");
         if (!std::isfinite(omega[k]))
             throw std::invalid_argument("FreeRotor: angular velocity component " + std::to_string(k) + " is not finite");
         for (int j = 0; j < 3; j++)
