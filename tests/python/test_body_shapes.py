@@ -29,11 +29,16 @@ def principalMoments(masses, coordinates):
     return np.linalg.eigvalsh(inertia)
 
 
-def periodicSystem(masses, edge=EDGE):
-    """Particles with these masses in a periodic box, with a NonbondedForce that acts on nothing (it
-    only makes the System periodic)."""
+#: Box vectors (nm): a cube of edge EDGE, and a triclinic cell in OpenMM's reduced form with the same widths.
+BOXES = {"cubic": np.diag([EDGE] * 3), "triclinic": np.array([[EDGE, 0, 0], [0.9, EDGE, 0], [-1.1, 0.7, EDGE]])}
+
+
+def periodicSystem(masses, edge=EDGE, box=None):
+    """Particles with these masses in a periodic box (a cube of this edge, or these box vectors), with
+    a NonbondedForce that acts on nothing (it only makes the System periodic)."""
     system = openmm.System()
-    system.setDefaultPeriodicBoxVectors(openmm.Vec3(edge, 0, 0), openmm.Vec3(0, edge, 0), openmm.Vec3(0, 0, edge))
+    box = np.diag([edge] * 3) if box is None else box
+    system.setDefaultPeriodicBoxVectors(*(openmm.Vec3(*vector) for vector in box))
     nonbonded = openmm.NonbondedForce()
     nonbonded.setNonbondedMethod(openmm.NonbondedForce.CutoffPeriodic)
     nonbonded.setCutoffDistance(0.4)
@@ -59,19 +64,29 @@ def kinkedRod():
     return [12.0] * len(coordinates), np.array(coordinates) + 0.5
 
 
+def wrapIntoCell(positions, box):
+    """Each position moved by whole box vectors into the cell (c, then b, then a), atom by atom."""
+    wrapped = np.array(positions, dtype=float)
+    for k in (2, 1, 0):
+        wrapped -= np.outer(np.floor(wrapped[:, k] / box[k][k]), box[k])
+    return wrapped
+
+
 @pytest.mark.parametrize("platformName", PLATFORMS)
+@pytest.mark.parametrize("boxName", BOXES)
 @pytest.mark.parametrize("wrapped", [False, True], ids=["contiguous", "wrapped"])
-def test_large_body_assembled_whole(platformName, wrapped):
+def test_large_body_assembled_whole(platformName, boxName, wrapped):
     masses, coordinates = kinkedRod()
+    box = BOXES[boxName]
     expected = principalMoments(masses, coordinates)
     rng = np.random.default_rng(5)
     velocities = rng.normal(scale=0.3, size=coordinates.shape)
-    given = coordinates - EDGE * np.floor(coordinates / EDGE) if wrapped else coordinates
+    given = wrapIntoCell(coordinates, box) if wrapped else coordinates
     runs = {}
     # Listed from an end (its first particle 1.6 nm from the far end), and from the middle.
     for order in ([list(range(10))], [[4, 5, 6, 7, 8, 9, 0, 1, 2, 3]]):
         integrator = openmmrigid.RigidBodyIntegrator(0.002, order)
-        context = make_context(periodicSystem(masses), integrator, platformName)
+        context = make_context(periodicSystem(masses, box=box), integrator, platformName)
         context.setPositions(given)
         context.setVelocities(velocities)
         np.testing.assert_allclose(integrator.getBodyMoments(0).value_in_unit(unit.amu * unit.nanometer**2), expected,
@@ -81,8 +96,9 @@ def test_large_body_assembled_whole(platformName, wrapped):
     for positions in runs.values():
         # The integrator writes each body whole, at one of its images.
         assert np.abs(intraBodyDistances(positions) - intraBodyDistances(coordinates)).max() < 1e-9
-    shift = runs[0] - runs[4]
-    assert np.abs(shift - EDGE * np.round(shift / EDGE)).max() < 1e-9
+    # Both lists give the same motion, up to a lattice vector (each body is placed at the image of its first particle).
+    lattice = np.linalg.solve(box.T, (runs[0] - runs[4]).T).T
+    assert np.abs(lattice - np.round(lattice)).max() < 1e-9
 
 
 @pytest.mark.parametrize("platformName", ["Reference"])
