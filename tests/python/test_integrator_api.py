@@ -353,8 +353,9 @@ def test_copy_of_a_bound_integrator_is_unbound():
     context, integrator = explicit_context("Reference")
     integrator.step(3)
     duplicate = copy.deepcopy(integrator)
-    with pytest.raises(openmm.OpenMMException):
-        duplicate.getNumBodies()
+    assert duplicate.getNumBodies() == integrator.getNumBodies()  # explicit bodies are counted unbound too
+    with pytest.raises(openmm.OpenMMException, match="once the integrator is bound"):
+        duplicate.getBodyKind(0)
     other = openmm.Context(trapped_system(), duplicate, platform("Reference"))
     other.setPositions(POSITIONS)
     duplicate.step(3)

@@ -123,8 +123,8 @@ public:
     /**
      * Give every body that has no shape yet the one it has in these positions. Those the positions
      * cannot shape (non-finite, or every particle at one point) wait for later positions, or, if
-     * strict, are an OpenMMException saying what is wrong. A constraint inside a body that the shape
-     * contradicts by more than 1 % is an OpenMMException.
+     * strict, are an OpenMMException saying what is wrong. The constraints inside a body are applied to
+     * its positions first (applyInternalConstraints()), so the shape satisfies them.
      */
     void captureShapes(const std::vector<OpenMM::Vec3>& positions, const StepGeometry& geometry, bool strict);
     /**
@@ -157,7 +157,7 @@ public:
     const std::vector<double>& getMasses() const {
         return masses;
     }
-    /** The constraints inside body b (dropped from the dynamics; an explicit body's shape must agree with them). */
+    /** The constraints inside body b (dropped from the dynamics; applied to the positions an explicit body takes its shape from). */
     const std::vector<InternalConstraint>& getInternalConstraints(int b) const {
         return internalConstraints[b];
     }
@@ -188,6 +188,8 @@ private:
     void shapeFromDistances(int b, const std::vector<double>& pairDistances);
     /** Give body b the shape it has in the positions; false (or, if strict, an exception) if they cannot give one. */
     bool shapeBody(int b, const std::vector<OpenMM::Vec3>& positions, const StepGeometry& geometry, bool strict);
+    /** Apply body b's internal constraints to its assembled positions (SHAKE); throw if that cannot be done. */
+    void applyInternalConstraints(int b, std::vector<OpenMM::Vec3>& whole) const;
     /** Set body b's shape from coordinates about its centre of mass (any orientation): principal axes, moments, kind. */
     void setShape(int b, const std::vector<Vector3>& centred);
     std::string className;
