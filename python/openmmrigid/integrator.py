@@ -65,6 +65,8 @@ def _raisingNoThermostatError(method):
                 raise
             raise NoThermostatError(str(error)) from None
     functools.update_wrapper(wrapper, method)
+    # As for every method _pythonapi wrapped: __wrapped__ is SWIG's own (whose docstring and signature are the C++ ones).
+    wrapper.__wrapped__ = getattr(method, "__wrapped__", method)
     return wrapper
 
 

@@ -218,7 +218,10 @@ def test_inherited_settings():
 
 def test_queries_need_a_context():
     integrator = RigidBodyIntegrator(0.001, EXPLICIT_BODIES)
-    for query in (integrator.getNumBodies, integrator.getNumDegreesOfFreedom,
+    assert integrator.getNumBodies() == len(EXPLICIT_BODIES)  # explicit bodies are counted without one
+    with pytest.raises(openmm.OpenMMException, match="once the integrator is bound"):
+        RigidBodyIntegrator(0.001).getNumBodies()  # bodies found from the System's constraints are not
+    for query in (integrator.getNumDegreesOfFreedom,
                   integrator.getTranslationalKineticEnergy, integrator.getRotationalKineticEnergy,
                   lambda: integrator.getBodyParticles(0), lambda: integrator.step(1)):
         with pytest.raises(openmm.OpenMMException):
