@@ -11,7 +11,8 @@ Context per process is reused across temperatures (ContextCache). The run is sto
 (examples/output/replica_exchange.nc) and analysed with openmmtools' MultiStateSamplerAnalyzer (MBAR,
 pymbar): the reduced free energies f(beta) = -ln Z(beta) of the temperatures, checked against
 thermodynamic integration of the mean potential energy, d f / d beta = <U> (trapezoid rule on the
-same samples); the neighbour swap acceptance and the round trips of the replicas in temperature; and
+samples MBAR uses; the two agree within their errors once the run is long enough to equilibrate,
+several hundred iterations, far more than the default's quick look); the neighbour swap acceptance and the round trips of the replicas in temperature; and
 whether the waters are still rigid in the last stored positions.
 
     python examples/replica_exchange.py [--replicas 4] [--iterations 40] [--steps 100] [--platform CPU]
@@ -75,18 +76,18 @@ def analyse(path, topology, say):
         iterations = reporter.read_last_iteration(last_checkpoint=False)
         analyzer = multistate.MultiStateSamplerAnalyzer(reporter)
         deltaF, deltaFError = analyzer.get_free_energy()
-        # Samples after the first fifth (equilibration); iteration 0 is the starting state.
+        # The samples MBAR uses: after the equilibration its detection discards (iteration 0 is the start).
         energies, _, _ = reporter.read_energies()
         replicaStates = reporter.read_replica_thermodynamic_states()
-        start = 1 + iterations // 5
+        start = max(1, analyzer.n_equilibration_iterations)
         potential = [[] for _ in temperatures]
         for i in range(start, iterations + 1):
             for replica, state in enumerate(replicaStates[i]):
                 potential[state].append(energies[i, replica, state]/beta[state])
         meanU = np.array([np.mean(u) for u in potential])
-        say(f"\n{iterations} iterations; statistics from iteration {start} on (the first fifth is equilibration); "
-            f"MBAR by openmmtools' MultiStateSamplerAnalyzer: {analyzer.n_equilibration_iterations} iterations discarded "
-            f"by its own detection, statistical inefficiency {analyzer.statistical_inefficiency:.2f}")
+        say(f"\n{iterations} iterations; MBAR by openmmtools' MultiStateSamplerAnalyzer, which discards "
+            f"{analyzer.n_equilibration_iterations} as equilibration (statistical inefficiency "
+            f"{analyzer.statistical_inefficiency:.2f}); <U> from the same iterations, {start} to {iterations}")
         say("  T (K)    <U> (kJ/mol)   f - f(Tmin): MBAR (kT)        thermodynamic integration of <U> d(beta) (kT)")
         integrated = 0.0
         for k, t in enumerate(temperatures):
