@@ -44,9 +44,10 @@ namespace OpenMMRigid {
  * constrained integrator applies them), so positions that violate them slightly are fine; a
  * constraint joining a body to anything else is an error. An AndersenThermostat, which redraws the
  * velocities of each constraint cluster, is an error at Context creation for an explicit body that
- * is not one constraint cluster (it would thermalise the body in parts, and cool it). Massless virtual sites are placed from
- * their parents after every move. Each body is assembled from the periodic images of its particles
- * nearest each other, so molecules split by the periodic boundary in the positions given are fine.
+ * is not one constraint cluster (it would thermalise the body in parts, and cool it). Massless
+ * virtual sites are placed from their parents after every move. Each body is assembled from the
+ * periodic images of its particles nearest each other, so molecules split by the periodic boundary
+ * in the positions given are fine.
  *
  * Velocities are on-step. Every step writes the velocity v = V + omega x (r - R) of each body
  * particle back to the Context, so that reporters, State objects and barostats see consistent data.

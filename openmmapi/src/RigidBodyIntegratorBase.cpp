@@ -56,10 +56,10 @@ void checkAndersenThermostat(const System& system, const vector<vector<int> >& b
                 throw OpenMMException(className + ": the System has an AndersenThermostat, which redraws velocities per "
                         "constraint cluster (particle by particle where there are no constraints), but the constraints do not "
                         "join particles " + to_string(bodies[b][0]) + " and " + to_string(p) + " of body " + to_string(b) +
-                        ": each collision would redraw part of the body, and its rigid motion would read cold. Use the "
-                        "integrator's own thermostat instead (RigidBodyIntegrator.setThermostat() or "
-                        "RigidBodyLangevinIntegrator; openmmtools then adds no AndersenThermostat), or keep the "
-                        "constraints that hold the body together");
+                        ": each collision would redraw part of the body, and its rigid motion would read cold. Remove the "
+                        "AndersenThermostat and thermostat with the integrator (RigidBodyIntegrator.setThermostat() or "
+                        "RigidBodyLangevinIntegrator; openmmtools then adds none), or keep the constraints that hold "
+                        "the body together");
 }
 
 } // namespace

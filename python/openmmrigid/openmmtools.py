@@ -167,8 +167,8 @@ class RigidBussiDynamicsMove(_RigidDynamicsMove):
 
     Each application runs ``n_steps`` steps of the symplectic splitting chosen (exact free drifts),
     each followed by the global rescaling of all momenta that samples the canonical kinetic energy at
-    the state's temperature, set on the Context's integrator by openmmtools. The dynamics is
-    Hamiltonian between rescalings, so it perturbs the trajectories far less than Langevin friction.
+    the state's temperature, set on the Context's integrator by openmmtools. Between rescalings the
+    dynamics is Hamiltonian, and a rescaling changes every momentum by the same factor.
 
     Parameters
     ----------
