@@ -34,7 +34,10 @@ import mpiplus
 import numpy as np
 import openmm
 from openmm import app, unit
-from openmmtools import cache, multistate, states
+
+# pymbar's notes (no JAX, how to read statistical inefficiencies) come as logging warnings on import and use.
+logging.getLogger("pymbar").setLevel(logging.ERROR)
+from openmmtools import cache, multistate, states  # noqa: E402
 
 import openmmrigid
 from openmmrigid.openmmtools import RigidLangevinDynamicsMove
