@@ -40,8 +40,9 @@ namespace OpenMMRigid {
  * positions are first set (whatever moves the particles before the first step, such as an energy
  * minimization), and is one molecule to OpenMM, so that barostats scale it whole and
  * getState(enforcePeriodicBox=true) keeps it whole. Constraints within a body are implied by its
- * rigidity: an explicit body takes its shape from the positions with them applied (SHAKE, as a
- * constrained integrator applies them), so positions that violate them slightly are fine; a
+ * rigidity: an explicit body takes its shape from the positions with them applied where any is off
+ * by more than the constraint tolerance (SHAKE, as a constrained integrator applies them), so
+ * positions that miss them are fine; a
  * constraint joining a body to anything else is an error. An AndersenThermostat, which redraws the
  * velocities of each constraint cluster, is an error at Context creation for an explicit body that
  * is not one constraint cluster (it would thermalise the body in parts, and cool it). Massless

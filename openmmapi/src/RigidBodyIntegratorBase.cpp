@@ -220,7 +220,7 @@ void RigidBodyIntegratorBase::captureShapes(const StepGeometry& geometry, bool s
         return;
     vector<Vec3> positions;
     context->getPositions(positions);
-    topology->captureShapes(positions, geometry, strict);
+    topology->captureShapes(positions, geometry, strict, getConstraintTolerance());
 }
 
 void RigidBodyIntegratorBase::projectBodies() {

@@ -124,9 +124,11 @@ public:
      * Give every body that has no shape yet the one it has in these positions. Those the positions
      * cannot shape (non-finite, or every particle at one point) wait for later positions, or, if
      * strict, are an OpenMMException saying what is wrong. The constraints inside a body are applied to
-     * its positions first (applyInternalConstraints()), so the shape satisfies them.
+     * its positions first where any is off by more than constraintTolerance (relative), so the shape
+     * satisfies them (applyInternalConstraints()).
      */
-    void captureShapes(const std::vector<OpenMM::Vec3>& positions, const StepGeometry& geometry, bool strict);
+    void captureShapes(const std::vector<OpenMM::Vec3>& positions, const StepGeometry& geometry, bool strict,
+                       double constraintTolerance);
     /**
      * The positions of body b's particles, each at the periodic image nearest the body's first
      * particle (a body is far smaller than half the box), so that a molecule split by the boundary is
@@ -187,9 +189,13 @@ private:
     /** Give body b the shape of the distances between each pair of its particles (n x n, row-major). */
     void shapeFromDistances(int b, const std::vector<double>& pairDistances);
     /** Give body b the shape it has in the positions; false (or, if strict, an exception) if they cannot give one. */
-    bool shapeBody(int b, const std::vector<OpenMM::Vec3>& positions, const StepGeometry& geometry, bool strict);
-    /** Apply body b's internal constraints to its assembled positions (SHAKE); throw if that cannot be done. */
-    void applyInternalConstraints(int b, std::vector<OpenMM::Vec3>& whole) const;
+    bool shapeBody(int b, const std::vector<OpenMM::Vec3>& positions, const StepGeometry& geometry, bool strict,
+                   double constraintTolerance);
+    /**
+     * Apply body b's internal constraints to its assembled positions (SHAKE) unless all hold within the
+     * tolerance (relative); throw if that cannot be done.
+     */
+    void applyInternalConstraints(int b, std::vector<OpenMM::Vec3>& whole, double tolerance) const;
     /** Set body b's shape from coordinates about its centre of mass (any orientation): principal axes, moments, kind. */
     void setShape(int b, const std::vector<Vector3>& centred);
     std::string className;
