@@ -119,7 +119,6 @@ def test_nve_integrator_is_not_thermostated(water):
         with pytest.raises(openmmrigid.NoThermostatError, match="no thermostat.*setThermostat") as raised:
             call()
         assert isinstance(raised.value, AttributeError) and isinstance(raised.value, openmm.OpenMMException)
-    assert not hasattr(integrator, "getTemperature") or True  # the method exists; calling it is what raises
     context = states.ThermodynamicState(system, T300).create_context(integrator, REFERENCE)
     thermostats = andersen_thermostats(context.getSystem())
     assert len(thermostats) == 1
