@@ -40,10 +40,15 @@ namespace OpenMMRigid {
  * positions are first set (whatever moves the particles before the first step, such as an energy
  * minimization), and is one molecule to OpenMM, so that barostats scale it whole and
  * getState(enforcePeriodicBox=true) keeps it whole. Constraints within a body are implied by its
- * rigidity (one that an explicit body's shape contradicts by more than 1 % is an error); a
- * constraint joining a body to anything else is an error. Massless virtual sites are placed from
- * their parents after every move. Each body is assembled from the periodic images of its particles
- * nearest each other, so molecules split by the periodic boundary in the positions given are fine.
+ * rigidity: an explicit body takes its shape from the positions with them applied where any is off
+ * by more than the constraint tolerance (SHAKE, as a constrained integrator applies them), so
+ * positions that miss them are fine; a
+ * constraint joining a body to anything else is an error. An AndersenThermostat, which redraws the
+ * velocities of each constraint cluster, is an error at Context creation for an explicit body that
+ * is not one constraint cluster (it would thermalise the body in parts, and cool it). Massless
+ * virtual sites are placed from their parents after every move. Each body is assembled from the
+ * periodic images of its particles nearest each other, so molecules split by the periodic boundary
+ * in the positions given are fine.
  *
  * Velocities are on-step. Every step writes the velocity v = V + omega x (r - R) of each body
  * particle back to the Context, so that reporters, State objects and barostats see consistent data.
@@ -161,6 +166,27 @@ public:
     double getThermostatTemperature() const {
         return thermostatTemperature;
     }
+    /**
+     * Get the temperature of the thermostat's heat bath, as thermostated integrators (LangevinIntegrator,
+     * RigidBodyLangevinIntegrator) name it, so that tools which look for getTemperature() and
+     * setTemperature() (openmmtools' ThermodynamicState) see the thermostat. Without a thermostat the
+     * integrator conserves the energy (NVE) and has no temperature: this is an error (in Python an
+     * openmm.OpenMMException that is also an AttributeError, which is how openmmtools recognises an
+     * integrator without a heat bath).
+     *
+     * @return the temperature, measured in Kelvin
+     * @throws OpenMMException if no thermostat is set
+     */
+    double getTemperature() const;
+    /**
+     * Set the temperature of the thermostat's heat bath, keeping its collision time. It may be changed
+     * between steps. Without a thermostat this is an error (see getTemperature()): use setThermostat()
+     * to add one.
+     *
+     * @param temperature  the temperature of the heat bath, measured in Kelvin
+     * @throws OpenMMException if no thermostat is set, or the temperature is negative or not finite
+     */
+    void setTemperature(double temperature);
     /**
      * Get the collision time tau of the thermostat.
      *

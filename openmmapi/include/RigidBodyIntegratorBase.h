@@ -75,7 +75,9 @@ public:
         return bodies;
     }
     /**
-     * Get the number of rigid bodies. Only available once the integrator is bound to a Context.
+     * Get the number of rigid bodies. Explicit bodies are counted at any time (before a Context is made,
+     * and before positions are set); bodies found from the System's constraints once the integrator
+     * is bound to a Context.
      */
     int getNumBodies() const;
     /**

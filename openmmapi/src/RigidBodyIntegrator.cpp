@@ -43,6 +43,27 @@ void RigidBodyIntegrator::setThermostat(double temperature, double collisionTime
     thermostatCollisionTime = collisionTime;
 }
 
+namespace {
+
+string noThermostatMessage(const string& method) {
+    return "RigidBodyIntegrator." + method + ": this integrator has no thermostat, so no temperature: it conserves the "
+           "energy (NVE); call setThermostat(temperature, collisionTime) for constant temperature";
+}
+
+} // namespace
+
+double RigidBodyIntegrator::getTemperature() const {
+    if (!thermostat)
+        throw OpenMMException(noThermostatMessage("getTemperature"));
+    return thermostatTemperature;
+}
+
+void RigidBodyIntegrator::setTemperature(double temperature) {
+    if (!thermostat)
+        throw OpenMMException(noThermostatMessage("setTemperature"));
+    setThermostat(temperature, thermostatCollisionTime);
+}
+
 double RigidBodyIntegrator::getThermostatWork() {
     getKernel();  // throws unless bound
     return stepState.thermostatWork;

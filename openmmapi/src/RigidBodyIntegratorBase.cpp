@@ -3,6 +3,7 @@
 #include "internal/RigidBodyMolecules.h"
 #include "internal/RigidBodySystem.h"
 #include "internal/StepSequence.h"
+#include "openmm/AndersenThermostat.h"
 #include "openmm/Context.h"
 #include "openmm/OpenMMException.h"
 #include "openmm/internal/ContextImpl.h"
@@ -10,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <istream>
 #include <ostream>
 #include <string>
@@ -18,6 +20,50 @@ using namespace OpenMM;
 using namespace std;
 
 namespace OpenMMRigid {
+
+namespace {
+
+/**
+ * Refuse an AndersenThermostat where it would thermalise part of a body. OpenMM's Andersen thermostat
+ * redraws the velocities of whole constraint clusters (AndersenThermostatImpl::calcParticleGroups), of
+ * single particles where there are no constraints. A body that is one cluster is redrawn whole, and its
+ * rigid projection is then an exact Maxwell-Boltzmann draw of its momenta; a body spread over several
+ * clusters (an explicit body without its internal constraints) would be redrawn in parts, and the
+ * projection onto rigid motion of partly redrawn velocities throws energy away: it reads cold.
+ */
+void checkAndersenThermostat(const System& system, const vector<vector<int> >& bodies, const string& className) {
+    bool andersen = false;
+    for (int f = 0; f < system.getNumForces(); f++)
+        andersen = andersen || dynamic_cast<const AndersenThermostat*>(&system.getForce(f)) != NULL;
+    if (!andersen)
+        return;
+    vector<int> parent(system.getNumParticles());
+    for (size_t i = 0; i < parent.size(); i++)
+        parent[i] = i;
+    function<int(int)> root = [&](int i) {
+        while (parent[i] != i)
+            i = parent[i] = parent[parent[i]];
+        return i;
+    };
+    for (int c = 0; c < system.getNumConstraints(); c++) {
+        int i, j;
+        double distance;
+        system.getConstraintParameters(c, i, j, distance);
+        parent[root(i)] = root(j);
+    }
+    for (size_t b = 0; b < bodies.size(); b++)
+        for (int p : bodies[b])
+            if (root(p) != root(bodies[b][0]))
+                throw OpenMMException(className + ": the System has an AndersenThermostat, which redraws velocities per "
+                        "constraint cluster (particle by particle where there are no constraints), but the constraints do not "
+                        "join particles " + to_string(bodies[b][0]) + " and " + to_string(p) + " of body " + to_string(b) +
+                        ": each collision would redraw part of the body, and its rigid motion would read cold. Remove the "
+                        "AndersenThermostat and thermostat with the integrator (RigidBodyIntegrator.setThermostat() or "
+                        "RigidBodyLangevinIntegrator; openmmtools then adds none), or keep the constraints that hold "
+                        "the body together");
+}
+
+} // namespace
 
 RigidBodyIntegratorBase::RigidBodyIntegratorBase(const string& className, double stepSize) : className(className),
         explicitBodies(false), rotationMethod(Exact), bound(false), forcesAreValid(false), needsProjection(true), loadedVelocityKick(0.0) {
@@ -69,6 +115,8 @@ vector<string> RigidBodyIntegratorBase::getKernelNames() {
 }
 
 int RigidBodyIntegratorBase::getNumBodies() const {
+    if (explicitBodies && !bound)
+        return bodies.size();
     return getTopology().getNumBodies();
 }
 
@@ -131,6 +179,9 @@ void RigidBodyIntegratorBase::initialize(ContextImpl& contextRef) {
     owner = &contextRef.getOwner();
     try {
         topology.reset(new RigidBodySystem(contextRef.getSystem(), bodies, explicitBodies, className));
+        // Bodies found from constraints are whole clusters: only explicit ones can be split.
+        if (explicitBodies)
+            checkAndersenThermostat(contextRef.getSystem(), bodies, className);
         try {
             kernel = context->getPlatform().createKernel(IntegrateRigidBodyStepKernel::Name(), contextRef);
         }
@@ -176,7 +227,7 @@ void RigidBodyIntegratorBase::captureShapes(const StepGeometry& geometry, bool s
         return;
     vector<Vec3> positions;
     context->getPositions(positions);
-    topology->captureShapes(positions, geometry, strict);
+    topology->captureShapes(positions, geometry, strict, getConstraintTolerance());
 }
 
 void RigidBodyIntegratorBase::projectBodies() {

@@ -237,13 +237,15 @@ void RigidBodySystem::assemble(int b, const vector<Vec3>& positions, const StepG
     }
 }
 
-void RigidBodySystem::captureShapes(const vector<Vec3>& positions, const StepGeometry& geometry, bool strict) {
+void RigidBodySystem::captureShapes(const vector<Vec3>& positions, const StepGeometry& geometry, bool strict,
+                                    double constraintTolerance) {
     for (int b = 0; b < getNumBodies(); b++)
         if (!shapeKnown[b])
-            shapeBody(b, positions, geometry, strict);
+            shapeBody(b, positions, geometry, strict, constraintTolerance);
 }
 
-bool RigidBodySystem::shapeBody(int b, const vector<Vec3>& positions, const StepGeometry& geometry, bool strict) {
+bool RigidBodySystem::shapeBody(int b, const vector<Vec3>& positions, const StepGeometry& geometry, bool strict,
+                                double constraintTolerance) {
     const int n = getBodySize(b);
     const int* members = getBodyParticles(b);
     vector<Vec3> whole(n);
@@ -261,23 +263,66 @@ bool RigidBodySystem::shapeBody(int b, const vector<Vec3>& positions, const Step
         throw OpenMMException(className + ": the particles of body " + to_string(b) + " all sit at one point; "
                 "an explicit body takes its shape from the positions, so set them before using the body");
     }
-    // A constraint inside the body is implied by its rigidity; one the shape contradicts is a mistake
-    // in the System or the positions, not something to drop silently. 1 % allows for positions read
-    // from a file with a few digits.
-    for (const InternalConstraint& constraint : internalConstraints[b]) {
-        const Vec3 separation = whole[constraint.first] - whole[constraint.second];
-        double distance = sqrt(separation.dot(separation));
-        if (fabs(distance - constraint.distance) > 0.01*constraint.distance)
-            throw OpenMMException(className + ": constraint " + to_string(constraint.index) + " holds particles " +
-                    to_string(members[constraint.first]) + " and " + to_string(members[constraint.second]) +
-                    " of body " + to_string(b) + " at " + to_string(constraint.distance) + " nm, but the positions that give "
-                    "the body its shape put them " + to_string(distance) + " nm apart; remove the constraint or set positions "
-                    "that satisfy it");
-    }
+    // The constraints inside the body hold in its shape: the positions are taken with them applied, as a
+    // constrained integrator applies them to the positions it is given.
+    if (!internalConstraints[b].empty())
+        applyInternalConstraints(b, whole, constraintTolerance);
     vector<Vector3> centred;
     centreOfMass(b, whole.data(), centred);
     setShape(b, centred);
     return true;
+}
+
+void RigidBodySystem::applyInternalConstraints(int b, vector<Vec3>& whole, double tolerance) const {
+    // Positions within the constraint tolerance (relative distance error, as OpenMM's) are left as
+    // they are, as a constrained integrator leaves them.
+    const int* members = getBodyParticles(b);
+    bool within = true;
+    for (const InternalConstraint& constraint : internalConstraints[b]) {
+        const Vec3 separation = whole[constraint.first] - whole[constraint.second];
+        within = within && fabs(sqrt(separation.dot(separation)) - constraint.distance) <= tolerance*constraint.distance;
+    }
+    if (within)
+        return;
+    // SHAKE (J.-P. Ryckaert, G. Ciccotti and H. J. C. Berendsen, J. Comput. Phys. 23, 327 (1977)) on the
+    // body's particles alone: each constraint in turn moves its two particles along their separation in
+    // the given positions, in inverse proportion to their masses, until every distance holds to 1e-12
+    // (relative), far inside any tolerance. Its fixed point is the mass-weighted nearest constrained
+    // geometry to first order.
+    const vector<Vec3> given = whole;
+    const InternalConstraint* failing = &internalConstraints[b][0];
+    const int maxIterations = 10000;
+    for (int iteration = 0; iteration < maxIterations; iteration++) {
+        bool converged = true;
+        for (const InternalConstraint& constraint : internalConstraints[b]) {
+            const Vec3 separation = whole[constraint.first] - whole[constraint.second];
+            const double target = constraint.distance*constraint.distance;
+            const double error = target - separation.dot(separation);
+            if (fabs(error) <= 2e-12*target)
+                continue;
+            converged = false;
+            failing = &constraint;
+            const Vec3 direction = given[constraint.first] - given[constraint.second];
+            const double w1 = 1.0/masses[members[constraint.first]], w2 = 1.0/masses[members[constraint.second]];
+            const double projection = separation.dot(direction);
+            if (!(projection > 0.0)) {
+                iteration = maxIterations;  // turned by 90 degrees or more from the given separation: SHAKE cannot go on
+                break;
+            }
+            const double g = error/(2.0*(w1 + w2)*projection);
+            whole[constraint.first] += direction*(g*w1);
+            whole[constraint.second] -= direction*(g*w2);
+        }
+        if (converged)
+            return;
+    }
+    const InternalConstraint& constraint = *failing;
+    const Vec3 separation = given[constraint.first] - given[constraint.second];
+    throw OpenMMException(className + ": the constraints inside body " + to_string(b) + " cannot be applied to the positions "
+            "that give it its shape (SHAKE did not converge; constraint " + to_string(constraint.index) + " holds particles " +
+            to_string(members[constraint.first]) + " and " + to_string(members[constraint.second]) + " at " +
+            to_string(constraint.distance) + " nm, the positions put them " + to_string(sqrt(separation.dot(separation))) +
+            " nm apart); set positions closer to the constraints, or remove them");
 }
 
 void RigidBodySystem::addBody(const vector<int>& members) {

@@ -25,6 +25,9 @@ removeIntraBodyInteractions
 getSupportedPlatforms
     The platforms that have the integrators' kernels here (Reference, CPU, and OpenCL and CUDA where
     their plugins are installed); pluginLoadFailures says why a GPU plugin present did not load.
+NoThermostatError
+    What ``RigidBodyIntegrator.getTemperature()`` raises without a thermostat (an ``openmm.OpenMMException``
+    and an ``AttributeError``, so that openmmtools sees an NVE integrator).
 deserializeIntegrator
     A RigidBodyIntegrator or RigidBodyLangevinIntegrator from XML (``openmm.XmlSerializer.deserialize`` does the same).
 FreeRotor
@@ -40,8 +43,8 @@ from importlib.metadata import PackageNotFoundError, version as _distributionVer
 
 from . import special, testing
 from .freerotor import FreeRotor
-from .integrator import (RigidBodyIntegrator, RigidBodyIntegratorBase, RigidBodyLangevinIntegrator, deserializeIntegrator,
-                         getSupportedPlatforms, pluginLoadFailures)
+from .integrator import (NoThermostatError, RigidBodyIntegrator, RigidBodyIntegratorBase, RigidBodyLangevinIntegrator,
+                         deserializeIntegrator, getSupportedPlatforms, pluginLoadFailures)
 from .intrabody import removeIntraBodyInteractions
 from .reporters import RigidStateDataReporter
 from .topology import rigidBodiesFromTopology
@@ -51,5 +54,5 @@ try:
 except PackageNotFoundError:  # imported from a source tree that was never installed
     __version__ = "unknown"
 
-__all__ = ["getSupportedPlatforms", "pluginLoadFailures", "RigidBodyIntegrator", "RigidBodyLangevinIntegrator", "RigidBodyIntegratorBase", "RigidStateDataReporter", "deserializeIntegrator", "FreeRotor", "special", "testing",
+__all__ = ["getSupportedPlatforms", "pluginLoadFailures", "NoThermostatError", "RigidBodyIntegrator", "RigidBodyLangevinIntegrator", "RigidBodyIntegratorBase", "RigidStateDataReporter", "deserializeIntegrator", "FreeRotor", "special", "testing",
            "rigidBodiesFromTopology", "removeIntraBodyInteractions", "__version__"]

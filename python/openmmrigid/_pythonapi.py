@@ -31,6 +31,7 @@ __all__ = ["QUANTITY_ARGUMENTS", "QUANTITY_RESULTS", "numpyStyle", "fromCpp", "p
 QUANTITY_ARGUMENTS = {
     ("RigidBodyIntegrator", "__init__"): (("stepSize", unit.picosecond),),
     ("RigidBodyIntegrator", "setThermostat"): (("temperature", unit.kelvin), ("collisionTime", unit.picosecond)),
+    ("RigidBodyIntegrator", "setTemperature"): (("temperature", unit.kelvin),),
     ("RigidBodyLangevinIntegrator", "__init__"): (("temperature", unit.kelvin),
                                                   ("frictionCoeff", unit.picosecond**-1),
                                                   ("stepSize", unit.picosecond)),
@@ -46,6 +47,7 @@ QUANTITY_RESULTS = {
     ("RigidBodyIntegratorBase", "getRotationalKineticEnergy"): unit.kilojoule_per_mole,
     ("RigidBodyIntegratorBase", "computeSystemTemperature"): unit.kelvin,
     ("RigidBodyIntegrator", "getThermostatTemperature"): unit.kelvin,
+    ("RigidBodyIntegrator", "getTemperature"): unit.kelvin,
     ("RigidBodyIntegrator", "getThermostatCollisionTime"): unit.picosecond,
     ("RigidBodyIntegrator", "getThermostatWork"): unit.kilojoule_per_mole,
     ("RigidBodyLangevinIntegrator", "getTemperature"): unit.kelvin,

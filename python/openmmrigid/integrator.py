@@ -8,17 +8,24 @@ rigidbodylangevinintegrator.i), subclasses of ``openmm.Integrator`` through thei
 - loads the platform kernels, ``libOpenMMRigidReference.so`` from this package's folder, with
   ``openmm.Platform.loadPluginLibrary`` (which calls the library's ``registerKernelFactories``);
   importing again, or a library already loaded from ``OPENMM_PLUGIN_DIR``, loads nothing twice;
-- makes ``openmm.XmlSerializer.deserialize`` and ``openmm.XmlSerializer.clone`` return a
-  ``RigidBodyIntegrator`` or ``RigidBodyLangevinIntegrator`` for one. The openmm wheel turns the
-  Integrator it deserializes into the most derived class it knows of, which stops at
-  ``openmm.Integrator`` for classes from plugins; the two functions it calls for integrators are
-  wrapped so that they hand back the right class when the C++ object is one of ours, and change
-  nothing for any other integrator.
+- makes ``openmm.XmlSerializer.deserialize``, ``openmm.XmlSerializer.clone`` and
+  ``openmm.CompoundIntegrator.getIntegrator`` return a ``RigidBodyIntegrator`` or
+  ``RigidBodyLangevinIntegrator`` for one. The openmm wheel turns the Integrator it returns into the
+  most derived class it knows of (SWIG's ``%factory``), which stops at ``openmm.Integrator`` for
+  classes from plugins; the functions are wrapped so that they hand back the right class when the
+  C++ object is one of ours, and change nothing for any other integrator. (``Context.getIntegrator()``
+  returns the Python object the Context was made with, so it is already of the right class.)
+
+``RigidBodyIntegrator.getTemperature`` and ``setTemperature`` raise ``NoThermostatError`` (an
+``openmm.OpenMMException`` that is also an ``AttributeError``) when no thermostat is set: tools that
+detect a heat bath by calling ``getTemperature()`` and catching ``AttributeError`` (openmmtools'
+``ThermodynamicState``) then treat the integrator as the NVE integrator it is.
 
 The serialization proxies themselves are registered by libOpenMMRigid when it loads, so that C++ code and
 ``openmm.XmlSerializer.serialize`` find it with nothing to do.
 """
 
+import functools
 import os
 import sys
 
@@ -28,7 +35,7 @@ from . import _pythonapi
 from . import openmmrigid as _swig
 
 __all__ = ["RigidBodyIntegrator", "RigidBodyLangevinIntegrator", "RigidBodyIntegratorBase", "deserializeIntegrator",
-           "getSupportedPlatforms", "pluginLoadFailures"]
+           "getSupportedPlatforms", "pluginLoadFailures", "NoThermostatError"]
 
 RigidBodyIntegratorBase = _swig.RigidBodyIntegratorBase
 RigidBodyIntegrator = _swig.RigidBodyIntegrator
@@ -39,6 +46,32 @@ getSupportedPlatforms = _swig.getSupportedPlatforms
 # the notes about them, and writes the sections in numpy style.
 _pythonapi.applyToClasses(RigidBodyIntegratorBase, RigidBodyIntegrator, RigidBodyLangevinIntegrator)
 getSupportedPlatforms.__doc__ = _pythonapi.numpyStyle(getSupportedPlatforms.__doc__)
+
+
+class NoThermostatError(openmm.OpenMMException, AttributeError):
+    """Raised by ``RigidBodyIntegrator.getTemperature()`` and ``setTemperature()`` when the integrator has
+    no thermostat (it conserves the energy: NVE). It is an ``openmm.OpenMMException``, as every error of
+    the integrators, and an ``AttributeError``, as a missing ``getTemperature`` is to tools that detect
+    thermostated integrators that way (openmmtools)."""
+
+
+def _raisingNoThermostatError(method):
+    """method, raising NoThermostatError (with the C++ message) where it fails for want of a thermostat."""
+    def wrapper(self, *args, **kwargs):
+        try:
+            return method(self, *args, **kwargs)
+        except openmm.OpenMMException as error:
+            if isinstance(error, NoThermostatError) or self.hasThermostat():
+                raise
+            raise NoThermostatError(str(error)) from None
+    functools.update_wrapper(wrapper, method)
+    # As for every method _pythonapi wrapped: __wrapped__ is SWIG's own (whose docstring and signature are the C++ ones).
+    wrapper.__wrapped__ = getattr(method, "__wrapped__", method)
+    return wrapper
+
+
+for _name in ("getTemperature", "setTemperature"):
+    setattr(RigidBodyIntegrator, _name, _raisingNoThermostatError(getattr(RigidBodyIntegrator, _name)))
 
 _KERNEL_NAME = "IntegrateRigidBodyStep"
 
@@ -122,6 +155,20 @@ def _patchXmlSerializer():
         setattr(openmm.XmlSerializer, name, _returningRigidBodyIntegrators(function))
 
 
+def _patchCompoundIntegrator():
+    """Wrap CompoundIntegrator.getIntegrator, once, so that it returns our classes for ours (the
+    compound keeps owning the integrator, as with stock ones)."""
+    function = openmm.CompoundIntegrator.getIntegrator
+    if hasattr(function, "_openmmrigidOriginal"):
+        return
+
+    def getIntegrator(self, *args):
+        return _mostDerived(function(self, *args))
+    functools.update_wrapper(getIntegrator, function)
+    getIntegrator._openmmrigidOriginal = function
+    openmm.CompoundIntegrator.getIntegrator = getIntegrator
+
+
 def deserializeIntegrator(xml):
     """Reconstruct a RigidBodyIntegrator or RigidBodyLangevinIntegrator from the XML that
     ``openmm.XmlSerializer.serialize`` wrote.
@@ -149,3 +196,4 @@ def deserializeIntegrator(xml):
 
 _loadKernels()
 _patchXmlSerializer()
+_patchCompoundIntegrator()

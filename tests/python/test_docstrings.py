@@ -270,6 +270,8 @@ def test_quantity_results_are_quantities():
     positions = [openmm.Vec3(0, 0, 0), openmm.Vec3(0.1, 0, 0), openmm.Vec3(0, 0.12, 0)]
     for cls in (RigidBodyIntegrator, RigidBodyLangevinIntegrator):
         integrator = cls(0.001, [[0, 1, 2]]) if cls is RigidBodyIntegrator else cls(300, 1, 0.001, [[0, 1, 2]])
+        if cls is RigidBodyIntegrator:
+            integrator.setThermostat(300, 0.1)  # getTemperature() is the thermostat's
         context = openmm.Context(system, integrator, openmm.Platform.getPlatformByName("Reference"))
         context.setPositions(positions)
         context.setVelocitiesToTemperature(300, 1)

@@ -234,7 +234,10 @@ def test_inherited_settings():
 
 def test_queries_need_a_context():
     integrator = RigidBodyIntegrator(0.001, EXPLICIT_BODIES)
-    for query in (integrator.getNumBodies, integrator.getNumDegreesOfFreedom,
+    assert integrator.getNumBodies() == len(EXPLICIT_BODIES)  # explicit bodies are counted without one
+    with pytest.raises(openmm.OpenMMException, match="once the integrator is bound"):
+        RigidBodyIntegrator(0.001).getNumBodies()  # bodies found from the System's constraints are not
+    for query in (integrator.getNumDegreesOfFreedom,
                   integrator.getTranslationalKineticEnergy, integrator.getRotationalKineticEnergy,
                   lambda: integrator.getBodyParticles(0), lambda: integrator.step(1)):
         with pytest.raises(openmm.OpenMMException):
@@ -380,8 +383,9 @@ def test_copy_of_a_bound_integrator_is_unbound():
     context, integrator = explicit_context("Reference")
     integrator.step(3)
     duplicate = copy.deepcopy(integrator)
-    with pytest.raises(openmm.OpenMMException):
-        duplicate.getNumBodies()
+    assert duplicate.getNumBodies() == integrator.getNumBodies()  # explicit bodies are counted unbound too
+    with pytest.raises(openmm.OpenMMException, match="once the integrator is bound"):
+        duplicate.getBodyKind(0)
     other = openmm.Context(trapped_system(), duplicate, platform("Reference"))
     other.setPositions(POSITIONS)
     duplicate.step(3)

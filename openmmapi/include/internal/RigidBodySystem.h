@@ -132,10 +132,12 @@ public:
     /**
      * Give every body that has no shape yet the one it has in these positions. Those the positions
      * cannot shape (non-finite, or every particle at one point) wait for later positions, or, if
-     * strict, are an OpenMMException saying what is wrong. A constraint inside a body that the shape
-     * contradicts by more than 1 % is an OpenMMException.
+     * strict, are an OpenMMException saying what is wrong. The constraints inside a body are applied to
+     * its positions first where any is off by more than constraintTolerance (relative), so the shape
+     * satisfies them (applyInternalConstraints()).
      */
-    void captureShapes(const std::vector<OpenMM::Vec3>& positions, const StepGeometry& geometry, bool strict);
+    void captureShapes(const std::vector<OpenMM::Vec3>& positions, const StepGeometry& geometry, bool strict,
+                       double constraintTolerance);
     /**
      * The positions of body b's particles, whole: the first particle where it is, and each other at
      * the periodic image nearest a neighbour already placed, along a tree that joins every particle
@@ -174,7 +176,7 @@ public:
     const std::vector<double>& getMasses() const {
         return masses;
     }
-    /** The constraints inside body b (dropped from the dynamics; an explicit body's shape must agree with them). */
+    /** The constraints inside body b (dropped from the dynamics; applied to the positions an explicit body takes its shape from). */
     const std::vector<InternalConstraint>& getInternalConstraints(int b) const {
         return internalConstraints[b];
     }
@@ -204,7 +206,13 @@ private:
     /** Give body b the shape of the distances between each pair of its particles (n x n, row-major). */
     void shapeFromDistances(int b, const std::vector<double>& pairDistances);
     /** Give body b the shape it has in the positions; false (or, if strict, an exception) if they cannot give one. */
-    bool shapeBody(int b, const std::vector<OpenMM::Vec3>& positions, const StepGeometry& geometry, bool strict);
+    bool shapeBody(int b, const std::vector<OpenMM::Vec3>& positions, const StepGeometry& geometry, bool strict,
+                   double constraintTolerance);
+    /**
+     * Apply body b's internal constraints to its assembled positions (SHAKE) unless all hold within the
+     * tolerance (relative); throw if that cannot be done.
+     */
+    void applyInternalConstraints(int b, std::vector<OpenMM::Vec3>& whole, double tolerance) const;
     /** Set body b's shape from coordinates about its centre of mass (any orientation): principal axes, moments, kind. */
     void setShape(int b, const std::vector<Vector3>& centred);
     /**
