@@ -16,7 +16,7 @@ namespace OpenMMRigid {
  * fastest of them, as OpenMM chooses for any System (the CPU platform, say, where the GPU platform's
  * plugin is missing). A Context made on a platform that is not listed fails with OpenMM's own
  * OpenMMException ("does not support all required kernels"): OpenMM checks the kernels before the
- * integrator can say more.
+ * integrator can say more. (The Python package rewords it, naming the platforms listed here.)
  *
  * @return the names of the platforms, e.g. Reference, CPU, OpenCL
  */

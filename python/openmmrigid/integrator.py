@@ -15,6 +15,11 @@ rigidbodylangevinintegrator.i), subclasses of ``openmm.Integrator`` through thei
   classes from plugins; the functions are wrapped so that they hand back the right class when the
   C++ object is one of ours, and change nothing for any other integrator. (``Context.getIntegrator()``
   returns the Python object the Context was made with, so it is already of the right class.)
+- makes ``openmm.Context(system, integrator, platform)`` with a rigid-body integrator on a platform
+  that has no kernels for it (CUDA without the openmm-rigid-cuda wheel) fail with a message that
+  names the platforms that have them, instead of OpenMM's generic "does not support all required
+  kernels". Only the platforms that have the kernels claim them, so a Context made without naming a
+  platform takes the fastest of those.
 
 ``RigidBodyIntegrator.getTemperature`` and ``setTemperature`` raise ``NoThermostatError`` (an
 ``openmm.OpenMMException`` that is also an ``AttributeError``) when no thermostat is set: tools that
@@ -169,6 +174,57 @@ def _patchCompoundIntegrator():
     openmm.CompoundIntegrator.getIntegrator = getIntegrator
 
 
+#: What OpenMM says when a Context is made on a platform without one of the kernels it needs.
+_MISSING_KERNELS = "does not support all required kernels"
+
+
+def _rigidIntegratorIn(integrator):
+    """The rigid-body integrator that integrator is or holds (a CompoundIntegrator's), or None."""
+    if isinstance(integrator, RigidBodyIntegratorBase):
+        return integrator
+    if isinstance(integrator, openmm.CompoundIntegrator):
+        for i in range(integrator.getNumIntegrators()):
+            rigid = _rigidIntegratorIn(integrator.getIntegrator(i))
+            if rigid is not None:
+                return rigid
+    return None
+
+
+def _unsupportedPlatformMessage(integrator, platform):
+    """The message for a Context made with a rigid-body integrator on a platform without its kernels."""
+    supported = getSupportedPlatforms()
+    message = (f"{type(integrator).__name__}: the {platform.getName()} platform has no kernels for the rigid-body "
+               f"integrators; they run on {', '.join(supported)} (openmmrigid.getSupportedPlatforms()).")
+    if platform.getName() == "CUDA":
+        message += (" For CUDA, install the plugin for your CUDA version: pip install \"openmm-rigid[cuda13]\" (the "
+                    "openmm-rigid-cuda-13 wheel).")
+    return message + " Or make the Context without naming a platform, and OpenMM takes the fastest of those."
+
+
+def _patchContext():
+    """Wrap Context.__init__, once, so that a Context made with a rigid-body integrator on a platform that
+    has no kernels for it says so and names the platforms that have them, instead of OpenMM's generic
+    message. OpenMM checks the kernels before the integrator can speak; only that error is reworded,
+    and only where the platform named lacks the rigid-body kernel."""
+    if hasattr(openmm.Context.__init__, "_openmmrigidOriginal"):
+        return
+    original = openmm.Context.__init__
+
+    def __init__(self, *args, **kwargs):
+        try:
+            __init__._openmmrigidOriginal(self, *args, **kwargs)
+        except openmm.OpenMMException as error:
+            integrator = _rigidIntegratorIn(args[1] if len(args) > 1 else kwargs.get("integrator"))
+            platform = args[2] if len(args) > 2 else kwargs.get("platform")
+            if (_MISSING_KERNELS in str(error) and integrator is not None and isinstance(platform, openmm.Platform)
+                    and not platform.supportsKernels([_KERNEL_NAME])):
+                raise openmm.OpenMMException(_unsupportedPlatformMessage(integrator, platform)) from error
+            raise
+    functools.update_wrapper(__init__, original)
+    __init__._openmmrigidOriginal = original
+    openmm.Context.__init__ = __init__
+
+
 def deserializeIntegrator(xml):
     """Reconstruct a RigidBodyIntegrator or RigidBodyLangevinIntegrator from the XML that
     ``openmm.XmlSerializer.serialize`` wrote.
@@ -197,3 +253,4 @@ def deserializeIntegrator(xml):
 _loadKernels()
 _patchXmlSerializer()
 _patchCompoundIntegrator()
+_patchContext()

@@ -340,6 +340,39 @@ def test_only_platforms_with_kernels_claim_them():
         assert platform.supportsKernels(["IntegrateRigidBodyStep"]) == (platform.getName() in supported)
 
 
+def test_named_platform_without_kernels_is_explained(monkeypatch):
+    """A Context made with a rigid-body integrator (alone or in a CompoundIntegrator) on a platform
+    without its kernels fails with a message that names the class, the platform and the platforms
+    that have the kernels; OpenMM's own error is kept for any other integrator or cause. No platform
+    here lacks the kernels, so OpenMM's refusal and the platform's answer are stood in for (the C++
+    TestPlatformSupport makes a real one)."""
+    generic = "Specified a Platform for a Context which does not support all required kernels"
+
+    def refuse(self, *args, **kwargs):
+        raise openmm.OpenMMException(generic)
+    monkeypatch.setattr(openmm.Context.__init__, "_openmmrigidOriginal", refuse)
+    monkeypatch.setattr(openmm.Platform, "supportsKernels", lambda self, names: self.getName() != "CUDA-like")
+    monkeypatch.setattr(openmm.Platform, "getName", lambda self: "CUDA-like")
+    cpu = platform("CPU")
+    system = trapped_system()
+    compound = openmm.CompoundIntegrator()
+    compound.addIntegrator(openmm.VerletIntegrator(0.001))
+    compound.addIntegrator(openmmrigid.RigidBodyLangevinIntegrator(300, 1, 0.001))
+    for integrator, className in ((RigidBodyIntegrator(0.001), "RigidBodyIntegrator"),
+                                  (compound, "RigidBodyLangevinIntegrator")):
+        with pytest.raises(openmm.OpenMMException) as error:
+            openmm.Context(system, integrator, cpu)
+        message = str(error.value)
+        assert message.startswith(f"{className}: the CUDA-like platform has no kernels"), message
+        assert "Reference" in message and "getSupportedPlatforms" in message
+        assert generic in str(error.value.__cause__)
+    with pytest.raises(openmm.OpenMMException, match=generic):
+        openmm.Context(system, openmm.VerletIntegrator(0.001), cpu)
+    monkeypatch.setattr(openmm.Platform, "supportsKernels", lambda self, names: True)
+    with pytest.raises(openmm.OpenMMException, match=generic):  # not for want of our kernel
+        openmm.Context(system, RigidBodyIntegrator(0.001), cpu)
+
+
 # ------------------------------------------------------------------------------------------------
 # In a Context and a Simulation
 # ------------------------------------------------------------------------------------------------
