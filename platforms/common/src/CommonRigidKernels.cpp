@@ -346,6 +346,9 @@ CommonIntegrateRigidBodyStepKernel::~CommonIntegrateRigidBodyStepKernel() {
         if (ours != nullptr && impl && ours->impl == impl.get())
             ours->impl = nullptr;
     }
+    // The device's arrays and the page-locked status word are released in the platform's context.
+    ContextSelector selector(cc);
+    impl.reset();
 }
 
 void CommonIntegrateRigidBodyStepKernel::initialize(ContextImpl& context, RigidBodySystem& bodies) {
