@@ -25,7 +25,8 @@
 #
 # Environment: GPU_CHECK_PYTHON (default python3), OUT (results in $OUT/gpu_check, else
 # build/gpu-check/results), BUDGET_S (seconds in all, default 480), STEP_COST_ARGS (replaces the
-# step-cost arguments after --platform and --precision). Exits non-zero if a phase failed.
+# step-cost arguments after --platform and --precision), GPU_CHECK_PYTEST_K (replaces pytest's -k
+# selection: a rehearsal on PoCL takes a part of the OpenCL tests). Exits non-zero if a phase failed.
 # The results folder holds at most 6 files: gpu_check.md (the results document), summary.txt,
 # logs.tar.gz (every phase's log), and the step-cost document and CSVs.
 set -euo pipefail
@@ -235,7 +236,7 @@ ctestRun() {
 pytestRun() {
     local selection="opencl"
     (( cuda )) && selection="cuda or opencl"
-    "$python" -m pytest tests/python -q -k "$selection" -p no:cacheprovider -rs
+    "$python" -m pytest tests/python -q -k "${GPU_CHECK_PYTEST_K:-$selection}" -p no:cacheprovider -rs
 }
 reserve=200
 phase ctest 120 ctestRun || true
