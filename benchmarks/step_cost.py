@@ -58,6 +58,8 @@ CUTOFF = 0.9*unit.nanometer
 TEMPERATURE = 300*unit.kelvin
 MODEL_NAMES = {"tip3p": "TIP3P", "tip4pew": "TIP4P-Ew"}
 STOCK, EXACT, NOSQUISH = "VerletIntegrator+SETTLE", "RigidBodyIntegrator/Exact", "RigidBodyIntegrator/NoSquish"
+# With --langevin: the Langevin pair, ours timed against stock LangevinMiddleIntegrator (1/ps, 300 K).
+STOCK_LANGEVIN, LANGEVIN = "LangevinMiddleIntegrator+SETTLE", "RigidBodyLangevinIntegrator/Exact"
 
 
 # ---------------------------------------------------------------------------------------------------
@@ -103,6 +105,9 @@ def parseArguments():
                              "chooses it (default: 1 default; a count given twice runs once)")
     parser.add_argument("--bodies", type=int, default=8000, help="bodies per kind in part 2 (default 8000)")
     parser.add_argument("--only", choices=["boxes", "bodies"], help="run only part 1 (boxes) or part 2 (bodies)")
+    parser.add_argument("--langevin", action="store_true",
+                        help="part 1 also times stock LangevinMiddleIntegrator + SETTLE and RigidBodyLangevinIntegrator "
+                             "(Exact), the latter's ratio taken to the former")
     parser.add_argument("--platform", default="CPU", choices=["CPU", "OpenCL", "CUDA"],
                         help="the platform of every timed Context (default CPU)")
     parser.add_argument("--precision", default="mixed", choices=["single", "mixed", "double"],
@@ -141,18 +146,22 @@ def equilibratedState(positions, system, cpu, steps, iterations):
     return context.getState(getPositions=True, getVelocities=True, enforcePeriodicBox=True)
 
 
-def boxIntegrators():
+def boxIntegrators(langevin):
     stock = openmm.VerletIntegrator(STEP)
     exact = openmmrigid.RigidBodyIntegrator(STEP)
     exact.setRotationMethod(openmmrigid.RigidBodyIntegrator.Exact)
     noSquish = openmmrigid.RigidBodyIntegrator(STEP)
     noSquish.setRotationMethod(openmmrigid.RigidBodyIntegrator.NoSquish)
-    return {STOCK: stock, EXACT: exact, NOSQUISH: noSquish}
+    integrators = {STOCK: stock, EXACT: exact, NOSQUISH: noSquish}
+    if langevin:
+        integrators[STOCK_LANGEVIN] = openmm.LangevinMiddleIntegrator(TEMPERATURE, 1/unit.picosecond, STEP)
+        integrators[LANGEVIN] = openmmrigid.RigidBodyLangevinIntegrator(TEMPERATURE, 1/unit.picosecond, STEP)
+    return integrators
 
 
 def measureBox(model, molecules, system, state, cpu, threads, args):
     """One row per integrator for this box and thread setting (cpu: the platform timed)."""
-    integrators = boxIntegrators()
+    integrators = boxIntegrators(args.langevin)
     contexts = []
     for integrator in integrators.values():
         context = openmm.Context(system, integrator, cpu, threadProperties(threads))
@@ -164,10 +173,10 @@ def measureBox(model, molecules, system, state, cpu, threads, args):
         say(f"  WARNING: RigidBodyIntegrator found {bodies} bodies in {molecules} waters")
     steps = blockSteps(integrators[STOCK], args.steps, args.seconds, 20)
     times, _ = timeInterleaved(integrators, steps, args.repetitions)
-    stockMedian = statistics.median(times[STOCK])
     rows = []
     for label, samples in times.items():
         median, low, high = medianRange(samples, 1e3)
+        stockMedian = statistics.median(times[STOCK_LANGEVIN if label in (STOCK_LANGEVIN, LANGEVIN) else STOCK])
         rows.append({"model": model, "molecules": molecules, "integrator": label, "threads": actualThreads,
                      "median_ms_per_step": f"{median:.4f}", "ratio_to_stock": f"{statistics.median(samples)/stockMedian:.4f}",
                      "repetitions": args.repetitions, "steps": steps,
@@ -206,6 +215,14 @@ def printBoxTable(rows):
         say(f"{MODEL_NAMES[key[0]]:<10}{key[1]:>10}{key[2]:>8}"
             + "".join(f"{float(cells[label]['median_ms_per_step']):>10.3f}" for label in (STOCK, EXACT, NOSQUISH))
             + f"{float(cells[EXACT]['ratio_to_stock']):>13.3f}{float(cells[NOSQUISH]['ratio_to_stock']):>12.3f}")
+    if any(r["integrator"] == LANGEVIN for r in rows):
+        say(f"\nLangevin (1/ps): median ms/step; ours/stock is RigidBodyLangevinIntegrator/LangevinMiddleIntegrator")
+        say(f"{'model':<10}{'molecules':>10}{'threads':>8}{'stock':>10}{'ours':>10}{'ours/stock':>12}")
+        for r in sorted((r for r in rows if r["integrator"] == LANGEVIN), key=lambda r: (r["model"], r["molecules"], r["threads"])):
+            stock = next(s for s in rows if s["integrator"] == STOCK_LANGEVIN
+                         and (s["model"], s["molecules"], s["threads"]) == (r["model"], r["molecules"], r["threads"]))
+            say(f"{MODEL_NAMES[r['model']]:<10}{r['molecules']:>10}{r['threads']:>8}{float(stock['median_ms_per_step']):>10.3f}"
+                f"{float(r['median_ms_per_step']):>10.3f}{float(r['ratio_to_stock']):>12.3f}")
 
 
 # ---------------------------------------------------------------------------------------------------

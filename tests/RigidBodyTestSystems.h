@@ -840,13 +840,20 @@ bool namesIndex(const string& text, const vector<int>& indices) {
 
 /**
  * Run each test, print "ok" with its time or "FAIL" with the message, and return the number of
- * failures. With OPENMMRIGID_TEST_FILTER set, only the tests whose names contain it run.
+ * failures. With OPENMMRIGID_TEST_FILTER set, only the tests whose names contain it, or one of its
+ * parts separated by '|', run.
  */
 int runTestList(const vector<std::pair<string, std::function<void()> > >& tests) {
     int failures = 0;
-    const char* filter = getenv("OPENMMRIGID_TEST_FILTER");
+    vector<string> filters;
+    if (const char* filter = getenv("OPENMMRIGID_TEST_FILTER")) {
+        std::stringstream parts(filter);
+        for (string part; std::getline(parts, part, '|');)
+            filters.push_back(part);
+    }
     for (auto& test : tests) {
-        if (filter != nullptr && test.first.find(filter) == string::npos)
+        if (!filters.empty() && std::none_of(filters.begin(), filters.end(),
+                                             [&](const string& part) { return test.first.find(part) != string::npos; }))
             continue;
         try {
             auto start = std::chrono::steady_clock::now();

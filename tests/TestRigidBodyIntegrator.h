@@ -42,9 +42,10 @@ using namespace OpenMMRigid;
 using std::string;
 using std::vector;
 
-const double freeMotionTolerance = 1e-12;       // nm; for velocities, relative to the largest speed
-const double reversalTolerance = 1e-8;          // nm
-const double momentumTolerance = 1e-10;         // relative
+// Set by a platform file for a GPU platform in single or mixed precision (TestGpuRigidBody.cpp).
+double freeMotionTolerance = 1e-12;             // nm; for velocities, relative to the largest speed
+double reversalTolerance = 1e-8;                // nm
+double momentumTolerance = 1e-10;               // relative
 const double orderRatio = 4.0, orderRatioSpread = 0.5;
 
 // ------------------------------------------------------------------------------------------------

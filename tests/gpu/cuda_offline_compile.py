@@ -15,7 +15,10 @@ compilation fails the script. No driver or GPU is needed: NVRTC is a library.
 
     python cuda_offline_compile.py --openmm-cuda <libOpenMMCUDA.so> --nvrtc <libnvrtc.so.13>
         --core <CorePreludeCommon.h> <CoreBasics.h> ... --kernels <kernels/*.cc> [--define NAME=VALUE ...]
-        [--arch sm_90 compute_90 ...]
+        [--arch sm_90 compute_90 ...] [--ptxas-verbose]
+
+With --ptxas-verbose, ptxas's report of each kernel (registers, stack frame, spill stores and loads)
+is printed under its compilation.
 """
 
 import argparse
@@ -157,6 +160,10 @@ def main():
                         help="a define the plugin passes to compileProgram (repeatable)")
     parser.add_argument("--arch", nargs="+", default=["sm_90"],
                         help="NVRTC targets: sm_XX for a cubin, compute_XX for PTX (default sm_90)")
+    parser.add_argument("--ptxas-verbose", action="store_true",
+                        help="for sm_XX targets, have ptxas report each kernel's registers, stack and spills "
+                             "(--ptxas-options=-v; OpenMM passes no options of a plugin's to NVRTC, so this is "
+                             "how the register use of the kernels is seen)")
     arguments = parser.parse_args()
 
     common, vectorOps = platformHeaders(arguments.openmm_cuda)
@@ -173,7 +180,10 @@ def main():
             text, starts = moduleSource(precision, common, vectorOps, kernelDefines, parts)
             for architecture in arguments.arch:
                 start = time.perf_counter()
-                ok, size, log = nvrtc.compile(text, name + ".cu", [f"-arch={architecture}", "--use_fast_math"])
+                options = [f"-arch={architecture}", "--use_fast_math"]
+                if arguments.ptxas_verbose and architecture.startswith("sm_"):
+                    options.append("--ptxas-options=-v")
+                ok, size, log = nvrtc.compile(text, name + ".cu", options)
                 seconds = time.perf_counter() - start
                 print(f"{name:<20} {precision:<7} {architecture:<11} {'ok' if ok else 'FAILED':<7}"
                       f"{size:>9} bytes {seconds:6.1f} s")

@@ -7,6 +7,7 @@
 #include "openmm/kernels.h"
 #include <algorithm>
 #include <cmath>
+#include <dlfcn.h>
 #include <initializer_list>
 #include <map>
 
@@ -22,6 +23,58 @@ const int sumThreads = 128;
 
 /** The error codes of the kernels (rigidBodies.cc). */
 enum { ErrorNone = 0, ErrorBodyNotFinite = 1, ErrorBodyMoves = 2, ErrorParticleMoves = 3 };
+
+/**
+ * How many steps apart ComputeContext::reorderAtoms() reorders the atoms (OpenMM 8.6.1,
+ * platforms/common/src/ComputeContext.cpp: "stepsSinceReorder < 250"). The kernel calls
+ * reorderAtoms() only on the steps it would reorder (see beforeLastForces()).
+ */
+const int reorderInterval = 250;
+
+/**
+ * One int of host memory that a non-blocking download fills while the host goes on queueing work.
+ * OpenCL copies into any host memory asynchronously. CUDA copies into pageable memory synchronously
+ * (cuMemcpyDtoHAsync returns when the copy is done, which drains the stream), so there the word is
+ * page-locked, from the driver's cuMemHostAlloc as OpenMM's own CUDA kernels allocate theirs. The
+ * plugin links no CUDA library (the driver comes loaded with libOpenMMCUDA.so), so the two functions
+ * are looked up in it; without them the word is ordinary memory: correct, but the read then waits.
+ */
+class HostStatusWord {
+public:
+    explicit HostStatusWord(bool pageLocked) {
+        if (pageLocked) {
+            void* driver = dlopen("libcuda.so.1", RTLD_NOW | RTLD_NOLOAD);
+            if (driver != nullptr) {
+                allocate = (AllocateFunction) dlsym(driver, "cuMemHostAlloc");
+                release = (ReleaseFunction) dlsym(driver, "cuMemFreeHost");
+                void* memory = nullptr;
+                if (allocate != nullptr && release != nullptr && allocate(&memory, sizeof(int), 0) == 0)
+                    pinned = (int*) memory;
+                dlclose(driver);  // still loaded: libOpenMMCUDA.so needs it
+            }
+        }
+        *get() = ErrorNone;
+    }
+    ~HostStatusWord() {
+        if (pinned != nullptr)
+            release(pinned);
+    }
+    HostStatusWord(const HostStatusWord&) = delete;
+    HostStatusWord& operator=(const HostStatusWord&) = delete;
+    int* get() {
+        return pinned != nullptr ? pinned : &word;
+    }
+    bool isPageLocked() const {
+        return pinned != nullptr;
+    }
+private:
+    typedef int (*AllocateFunction)(void**, size_t, unsigned int);
+    typedef int (*ReleaseFunction)(void*);
+    AllocateFunction allocate = nullptr;
+    ReleaseFunction release = nullptr;
+    int* pinned = nullptr;
+    int word = ErrorNone;
+};
 
 } // namespace
 
@@ -81,10 +134,23 @@ struct CommonIntegrateRigidBodyStepKernel::Impl {
     ComputeKernel thermalizeBodies, thermalizeFree, scaleBodies, scaleFree, kineticEnergies, sumPairs, fitTranslation;
     ComputeKernel projectBodyVelocities;
     /**
-     * The failure flag of the device projections: set by rigidFitTranslation for a body that did not
-     * move as one translation, by rigidProjectVelocities for a non-finite velocity.
+     * The failure flags of the device projections: [0] set by rigidFitTranslation for a body that did
+     * not move as one translation (rigidProjectVelocities then does nothing), [1] by
+     * rigidProjectVelocities for a non-finite velocity.
      */
     ComputeArray projectionFailed;
+    /**
+     * The step's status word (errorCode), copied without a wait before the last force evaluation and
+     * waited for after it is queued (statusPending between the two): checkStatus().
+     */
+    unique_ptr<HostStatusWord> status;
+    ComputeEvent statusRead;
+    bool statusPending = false;
+    /**
+     * Whether the atom order was reset (a reorder not the kernel's own, a host projection, a new
+     * Context), which forces the next reorderAtoms() to reorder: the next step lets it decide.
+     */
+    bool orderReset = true;
     /** How many times the atoms were reordered, and the count when the step began. */
     int reorders = 0, reordersAtStepStart = 0;
     /** Whether this kernel is reordering the atoms (its own call of reorderAtoms(), or a projection's setPositions()). */
@@ -100,6 +166,21 @@ struct CommonIntegrateRigidBodyStepKernel::Impl {
         updateAtomOrder->execute(cc.getNumAtoms());
     }
     void followWrapping();
+    /** Whether cc.reorderAtoms() would reorder now (ComputeContext::reorderAtoms() of OpenMM 8.6.1). */
+    bool reorderIsDue() const {
+        return cc.getNumAtoms() > 0 && cc.getNonbondedUtilities().getUseCutoff() &&
+               (cc.getStepsSinceReorder() >= reorderInterval || orderReset);
+    }
+    /** Throws the message of a failed stage if code says one failed (and clears the device's status). */
+    void throwIfFailed(int code);
+    /** Waits for the status copied in beforeLastForces() (queued before the forces) and throws if a stage failed. */
+    void checkStatus() {
+        if (!statusPending)
+            return;
+        statusRead->wait();
+        statusPending = false;
+        throwIfFailed(*status->get());
+    }
     void recordWrittenVelocities() {
         if (numBodyParticles > 0)
             recordVelocities->execute(numBodyParticles);
@@ -139,8 +220,10 @@ public:
         // positionsAreCurrent(), brings.
         if (impl->reordering)
             impl->followWrapping();
-        else
+        else {
             impl->written = false;
+            impl->orderReset = true;
+        }
     }
     Impl* impl;
 };
@@ -263,6 +346,9 @@ CommonIntegrateRigidBodyStepKernel::~CommonIntegrateRigidBodyStepKernel() {
         if (ours != nullptr && impl && ours->impl == impl.get())
             ours->impl = nullptr;
     }
+    // The device's arrays and the page-locked status word are released in the platform's context.
+    ContextSelector selector(cc);
+    impl.reset();
 }
 
 void CommonIntegrateRigidBodyStepKernel::initialize(ContextImpl& context, RigidBodySystem& bodies) {
@@ -315,6 +401,8 @@ void CommonIntegrateRigidBodyStepKernel::initialize(ContextImpl& context, RigidB
     d.errorCode.initialize<int>(cc, 1, "rigidErrorCode");
     d.errorCode.upload(vector<int>(1, ErrorNone));
     d.errorData.initialize<double>(cc, 3, "rigidErrorData");
+    d.status.reset(new HostStatusWord(getPlatform().getName() == "CUDA"));
+    d.statusRead = cc.createEvent();
     d.energies.initialize<double>(cc, 2*max(1, d.numBodies + d.numFree), "rigidKineticEnergies");
     d.sums.initialize<double>(cc, 2, "rigidKineticEnergySums");
     d.startPosq.initialize(cc, cc.getPosq().getSize(), cc.getPosq().getElementSize(), "rigidStartPosq");
@@ -439,7 +527,7 @@ void CommonIntegrateRigidBodyStepKernel::initialize(ContextImpl& context, RigidB
     d.sumPairs->addArg(d.energies);
     d.sumPairs->addArg(d.sums);
 
-    d.projectionFailed.initialize<int>(cc, 1, "rigidProjectionFailed");
+    d.projectionFailed.initialize<int>(cc, 2, "rigidProjectionFailed");
     d.fitTranslation = program->createKernel("rigidFitTranslation");
     d.fitTranslation->addArg(d.numBodies);
     for (ArrayInterface* array : initializer_list<ArrayInterface*>{&d.bodyStart, &d.bodyParticles, &d.bodyCoordinates,
@@ -483,6 +571,12 @@ void CommonIntegrateRigidBodyStepKernel::beginStep(ContextImpl& context, const S
 void CommonIntegrateRigidBodyStepKernel::abandonStep(ContextImpl& context) {
     Impl& d = *impl;
     ContextSelector selector(cc);
+    if (d.statusPending) {
+        // The step stopped before its status was checked (a Force threw): the copy must be done
+        // before the word is used again.
+        d.statusRead->wait();
+        d.statusPending = false;
+    }
     d.errorCode.upload(vector<int>(1, ErrorNone));
     // The copies are in the atom order of the step's start: the atoms are reordered only right before
     // the step's last force evaluation, after every stage that can fail has been checked.
@@ -501,13 +595,15 @@ void CommonIntegrateRigidBodyStepKernel::project(ContextImpl& context) {
     Impl& d = *impl;
     ContextSelector selector(cc);
     // Positions that moved each body by one translation since the kernel wrote them (a barostat's
-    // move, every few steps): the fit is done on the device. Anything else is fitted on the host.
+    // move, every few steps): the fit is done on the device, the velocities are projected there if
+    // it succeeded, and the host reads both flags at once. Anything else is fitted on the host.
     if (d.written && d.numBodies > 0) {
-        d.projectionFailed.upload(vector<int>(1, 0));
+        cc.clearBuffer(d.projectionFailed);
         d.fitTranslation->execute(d.numBodies);
-        int notRigid;
-        d.projectionFailed.download(&notRigid);
-        if (!notRigid && projectVelocitiesOnDevice(context)) {
+        d.projectBodyVelocities->execute(d.numBodies);
+        int failed[2];
+        d.projectionFailed.download(failed);
+        if (!failed[0] && !failed[1]) {
             context.computeVirtualSites();
             d.writtenStep = cc.getStepCount();
             return;
@@ -546,6 +642,7 @@ void CommonIntegrateRigidBodyStepKernel::project(ContextImpl& context) {
     d.rebuildAtomOrder();
     d.recordWrittenVelocities();
     context.computeVirtualSites();
+    d.orderReset = true;
     d.written = true;
     d.writtenStep = cc.getStepCount();
 }
@@ -554,11 +651,11 @@ bool CommonIntegrateRigidBodyStepKernel::projectVelocitiesOnDevice(ContextImpl& 
     Impl& d = *impl;
     if (d.numBodies == 0)
         return true;
-    d.projectionFailed.upload(vector<int>(1, 0));
+    cc.clearBuffer(d.projectionFailed);
     d.projectBodyVelocities->execute(d.numBodies);
-    int notFinite;
-    d.projectionFailed.download(&notFinite);
-    return !notFinite;
+    int failed[2];
+    d.projectionFailed.download(failed);
+    return !failed[1];
 }
 
 void CommonIntegrateRigidBodyStepKernel::projectVelocities(ContextImpl& context) {
@@ -622,6 +719,8 @@ void CommonIntegrateRigidBodyStepKernel::closingKick(ContextImpl& context, doubl
     }
     if (d.solver)
         d.solver->applyVelocityConstraints(constraintTolerance);
+    // After the last force evaluation and this stage are queued: the host waits here while the device works.
+    d.checkStatus();
 }
 
 void CommonIntegrateRigidBodyStepKernel::thermalize(ContextImpl& context, double c, double kT, uint64_t seed, uint64_t counter,
@@ -679,25 +778,45 @@ double CommonIntegrateRigidBodyStepKernel::computeKineticEnergy(ContextImpl& con
     return cc.getIntegrationUtilities().computeKineticEnergy(0.0);
 }
 
+void CommonIntegrateRigidBodyStepKernel::Impl::throwIfFailed(int code) {
+    if (code == ErrorNone)
+        return;
+    vector<double> data;
+    errorData.download(data);
+    errorCode.upload(vector<int>(1, ErrorNone));
+    const string& className = bodies->getClassName();
+    if (code == ErrorBodyNotFinite)
+        throw OpenMMException(RigidBodyDynamics::notFiniteMessage(className, (int) data[0]));
+    throw OpenMMException(RigidBodyDynamics::unstableMessage(className, code == ErrorBodyMoves ? "body" : "particle", (int) data[0],
+                                                             data[1], data[2], geometry));
+}
+
 void CommonIntegrateRigidBodyStepKernel::beforeLastForces(ContextImpl& context) {
     Impl& d = *impl;
     ContextSelector selector(cc);
-    // The one copy from the device in a step: whether a stage found the simulation unstable.
-    int code;
-    d.errorCode.download(&code);
-    if (code != ErrorNone) {
-        vector<double> data;
-        d.errorData.download(data);
-        d.errorCode.upload(vector<int>(1, ErrorNone));
-        const string& className = d.bodies->getClassName();
-        if (code == ErrorBodyNotFinite)
-            throw OpenMMException(RigidBodyDynamics::notFiniteMessage(className, (int) data[0]));
-        throw OpenMMException(RigidBodyDynamics::unstableMessage(className, code == ErrorBodyMoves ? "body" : "particle", (int) data[0],
-                                                                 data[1], data[2], d.geometry));
+    if (d.reorderIsDue()) {
+        // A step that reorders (one in 250): the reorder downloads the atoms anyway, and must not
+        // happen on a failed step (abandonStep() restores copies in the step's atom order), so the
+        // status is read first, with a wait. Reordering right before the force evaluation keeps the
+        // forces about to be computed valid for the next step's first kick.
+        int code;
+        d.errorCode.download(&code);
+        d.throwIfFailed(code);
+        OwnReorder own(d.reordering);
+        d.orderReset = false;
+        cc.reorderAtoms();
+        return;
     }
-    // Reordering now keeps the forces about to be computed valid for the next step's first kick.
-    OwnReorder own(d.reordering);
-    cc.reorderAtoms();
+    // Any other step: the status is copied without a wait and checked once the force evaluation is
+    // queued (checkStatus(), in closingKick()), so that the device never idles while the host
+    // launches the force kernels. reorderAtoms() is not called: it would not reorder (unless a
+    // NonbondedUtilities asked for an early reorder, which then waits for the next due step), and
+    // this is what it does when it does not.
+    d.errorCode.download(d.status->get(), false);
+    d.statusRead->enqueue();
+    d.statusPending = true;
+    cc.setStepsSinceReorder(cc.getStepsSinceReorder() + 1);
+    cc.setAtomsWereReordered(false);
 }
 
 void CommonIntegrateRigidBodyStepKernel::finishStep(ContextImpl& context, double dt) {

@@ -12,8 +12,8 @@
  * centre R, velocity V, angular momentum L (lab frame), attitude A (lab to body, row-major).
  *
  * Errors (an unstable simulation) are written once to errorCode/errorData (the first wins) and the
- * offending body or particle is left where it was; the host reads them before the step's last force
- * evaluation.
+ * offending body or particle is left where it was; the host copies errorCode without waiting before
+ * the step's last force evaluation and looks at it once that evaluation is queued.
  */
 
 #define RIGID_STATE_SIZE 18
@@ -590,13 +590,13 @@ KERNEL void rigidSumPairs(int count, GLOBAL const double* RESTRICT values, GLOBA
  * Carlo barostat moves every molecule by the scaled displacement of its centre): the centre moves by
  * the mass-weighted mean displacement of the body's particles from where the body had them, and the
  * particles are put at the moved rigid positions. A body whose particles moved otherwise than by one
- * translation (by more than `tolerance` nm) sets *notRigid and is left as it is: the host fits
+ * translation (by more than `tolerance` nm) sets failed[0] and is left as it is: the host fits
  * every body then.
  */
 KERNEL void rigidFitTranslation(int numBodies, GLOBAL const int* RESTRICT bodyStart, GLOBAL const int* RESTRICT bodyParticles,
         GLOBAL const double* RESTRICT bodyCoordinates, GLOBAL const double* RESTRICT bodyParticleMass,
         GLOBAL const double* RESTRICT bodyMass, GLOBAL const int* RESTRICT currentIndex, GLOBAL double* RESTRICT states,
-        GLOBAL real4* posq, GLOBAL real4* posqCorrection, double tolerance, GLOBAL int* notRigid) {
+        GLOBAL real4* posq, GLOBAL real4* posqCorrection, double tolerance, GLOBAL int* failed) {
     for (int b = GLOBAL_ID; b < numBodies; b += GLOBAL_SIZE) {
         RigidBodyState s;
         double arm[3], x[3], shift[3] = {0.0, 0.0, 0.0};
@@ -619,7 +619,7 @@ KERNEL void rigidFitTranslation(int numBodies, GLOBAL const int* RESTRICT bodySt
                 rigid = rigid && fabs(x[k] - (s.r[k] + shift[k] + arm[k])) <= tolerance;
         }
         if (!rigid) {
-            notRigid[0] = 1;
+            failed[0] = 1;
             continue;
         }
         for (k = 0; k < 3; k++)
@@ -632,13 +632,16 @@ KERNEL void rigidFitTranslation(int numBodies, GLOBAL const int* RESTRICT bodySt
 /*
  * RigidBodyDynamics::projectVelocities: each body's particle velocities replaced by the rigid motion
  * with their linear and angular momentum about the body as it is placed, v_i = V + omega x A^T b_i,
- * and recorded as written.
+ * and recorded as written. Nothing is done if failed[0] is set (rigidFitTranslation, launched
+ * before, could not place every body: the host projects then); a non-finite momentum sets failed[1].
  */
 KERNEL void rigidProjectVelocities(int numBodies, GLOBAL const int* RESTRICT bodyStart, GLOBAL const int* RESTRICT bodyParticles,
         GLOBAL const double* RESTRICT bodyCoordinates, GLOBAL const double* RESTRICT bodyParticleMass,
         GLOBAL const double* RESTRICT bodyMass, GLOBAL const RigidShape* RESTRICT shapes, GLOBAL const int* RESTRICT currentIndex,
         GLOBAL double* RESTRICT states, GLOBAL double* RESTRICT writtenVelocities, GLOBAL mixed4* RESTRICT velm,
-        GLOBAL int* notFinite) {
+        GLOBAL int* failed) {
+    if (failed[0])
+        return;
     for (int b = GLOBAL_ID; b < numBodies; b += GLOBAL_SIZE) {
         RigidBodyState s;
         RigidShape shape = shapes[b];
@@ -648,7 +651,7 @@ KERNEL void rigidProjectVelocities(int numBodies, GLOBAL const int* RESTRICT bod
         rigidLoadState(states, b, &s);
         rigidMomentaOfParticles(&s, bodyCoordinates, bodyParticles, bodyParticleMass, bodyMass[b], currentIndex, start, end, velm, com, l);
         if (!isfinite(com[0] + com[1] + com[2] + l[0] + l[1] + l[2])) {
-            notFinite[0] = 1;
+            failed[1] = 1;
             continue;
         }
         for (k = 0; k < 3; k++) {

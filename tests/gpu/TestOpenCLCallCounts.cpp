@@ -1,0 +1,154 @@
+/* -------------------------------------------------------------------------- *
+ *                               OpenMM-Rigid                                 *
+ * -------------------------------------------------------------------------- *
+ * What a step costs the host on OpenCL: the host waits and the kernel        *
+ * launches of one step of each integrator, counted by OpenCLCallCounter.c    *
+ * (which every OpenCL call of OpenMM and of the plugins goes through), on a  *
+ * PME box of 64 rigid TIP3P waters, against stock OpenMM's VerletIntegrator *
+ * and LangevinMiddleIntegrator with SETTLE on the same System:               *
+ *                                                                            *
+ *   TestOpenCLCallCounts [single|mixed|double]     (mixed unless given)      *
+ *                                                                            *
+ * Asserted, per step, on steps without an atom reorder: the rigid-body       *
+ * integrators make the host stall no more often than stock does (the force  *
+ * evaluation's own waits are the same in both), i.e. their own stages add   *
+ * no blocking read; Bussi's thermostat adds at most one (its kinetic-energy  *
+ * sum); and they launch at most two kernels more than stock. A barostat step *
+ * and a reordering step are measured and printed. Exits 77 (skipped) where   *
+ * there is no OpenCL platform.                                               *
+ * -------------------------------------------------------------------------- */
+
+#include "../RigidBodyTestSystems.h"
+#include "RigidBodyIntegrator.h"
+#include "RigidBodyLangevinIntegrator.h"
+#include "openmm/LangevinMiddleIntegrator.h"
+#include "openmm/MonteCarloBarostat.h"
+#include <cstdio>
+#include <string>
+
+extern "C" {
+typedef struct {
+    long stalls, overlappedWaits, blockingReads, blockingWrites, finishes, kernelLaunches, transfers;
+} OpenCLCallCounts;
+OpenCLCallCounts openclCallCounts(void);
+void openclCallCountsReset(void);
+}
+
+using namespace RigidBodyIntegratorTests;
+
+namespace {
+
+struct StepCounts {
+    string name;
+    double stalls = 0, overlappedWaits = 0, launches = 0, transfers = 0;  // per step
+    long worstStalls = 0;                                                  // the most in one step
+    long reorders = 0;
+};
+
+/** Steps the integrator stepsToMeasure times, one step at a time, and counts each step's calls. */
+StepCounts measure(const string& name, Context& context, Integrator& integrator, int steps) {
+    StepCounts result;
+    result.name = name;
+    for (int i = 0; i < steps; i++) {
+        openclCallCountsReset();
+        integrator.step(1);
+        OpenCLCallCounts c = openclCallCounts();
+        result.stalls += c.stalls;
+        result.overlappedWaits += c.overlappedWaits;
+        result.launches += c.kernelLaunches;
+        result.transfers += c.transfers;
+        result.worstStalls = std::max(result.worstStalls, c.stalls);
+    }
+    result.stalls /= steps;
+    result.overlappedWaits /= steps;
+    result.launches /= steps;
+    result.transfers /= steps;
+    return result;
+}
+
+void print(const StepCounts& c) {
+    std::printf("%-44s stalls %5.2f (worst step %ld)  overlapped waits %5.2f  launches %6.2f  transfers %5.2f\n", c.name.c_str(),
+                c.stalls, c.worstStalls, c.overlappedWaits, c.launches, c.transfers);
+}
+
+} // namespace
+
+int main(int argc, char* argv[]) {
+    const string precision = (argc > 1 ? argv[1] : "mixed");
+    try {
+        Platform::loadPluginsFromDirectory(OPENMM_PLUGIN_DIR);
+        bool found = false;
+        for (int i = 0; i < Platform::getNumPlatforms(); i++)
+            found = found || Platform::getPlatform(i).getName() == "OpenCL";
+        if (!found) {
+            std::cout << "no OpenCL platform: skipped" << std::endl;
+            return 77;
+        }
+        Platform::loadPluginLibrary(OPENMMRIGID_OPENCL_PLUGIN);
+        Platform& platform = Platform::getPlatformByName("OpenCL");
+        preparationPlatform = &Platform::getPlatformByName("Reference");
+        Scene scene = makeWaterBox(platform, false);
+        System& system = *scene.system;
+        const std::map<string, string> properties = {{"Precision", precision}};
+        // Steps 21 to 60 of a Context: no reorder (OpenMM reorders every 250 steps); 40 steps, a
+        // multiple of the period (2 or 4 steps) with which stock's launches vary.
+        const int warmup = 20, steps = 40;
+        auto run = [&](const string& name, Integrator& integrator) {
+            Context context(system, integrator, platform, properties);
+            context.setPositions(scene.positions);
+            context.setVelocities(scene.velocities);
+            integrator.step(warmup);
+            return measure(name, context, integrator, steps);
+        };
+        VerletIntegrator stockVerlet(0.002);
+        LangevinMiddleIntegrator stockLangevin(300.0, 1.0, 0.002);
+        RigidBodyIntegrator verlet(0.002);
+        RigidBodyIntegrator bussi(0.002);
+        bussi.setThermostat(300.0, 0.1);
+        RigidBodyLangevinIntegrator langevin(300.0, 1.0, 0.002);
+        StepCounts counts[] = {run("stock VerletIntegrator + SETTLE", stockVerlet), run("RigidBodyIntegrator (Verlet)", verlet),
+                               run("stock LangevinMiddleIntegrator + SETTLE", stockLangevin),
+                               run("RigidBodyLangevinIntegrator", langevin), run("RigidBodyIntegrator + Bussi thermostat", bussi)};
+        std::cout << "OpenCL, " << precision << " precision, 64 TIP3P waters, PME; per step, steps " << warmup + 1 << " to "
+                  << warmup + steps << ":" << std::endl;
+        for (const StepCounts& c : counts)
+            print(c);
+
+        // Printed only: steps across a reorder, and steps with a barostat move (frequency 1: every step).
+        {
+            RigidBodyIntegrator reordering(0.002);
+            Context context(system, reordering, platform, properties);
+            context.setPositions(scene.positions);
+            context.setVelocities(scene.velocities);
+            // A reorder is due after 250 steps without one; the step that does it waits for the atoms.
+            reordering.step(240);
+            print(measure("RigidBodyIntegrator, steps 241-260 (one reorders)", context, reordering, 20));
+        }
+        system.addForce(new MonteCarloBarostat(1.0, 300.0, 1));
+        VerletIntegrator stockBarostat(0.002);
+        RigidBodyIntegrator oursBarostat(0.002);
+        print(run("stock Verlet, barostat every step", stockBarostat));
+        print(run("RigidBodyIntegrator, barostat every step", oursBarostat));
+
+        const StepCounts &stockV = counts[0], &oursV = counts[1], &stockL = counts[2], &oursL = counts[3], &oursB = counts[4];
+        auto check = [](bool condition, const string& what) {
+            if (!condition)
+                throw OpenMMException("Assertion failure: " + what);
+        };
+        for (const StepCounts* ours : {&oursV, &oursB}) {
+            const double allowed = (ours == &oursB ? 1 : 0);  // Bussi: the kinetic-energy sum is read back
+            check(ours->stalls <= stockV.stalls + allowed, ours->name + ": more host stalls per step than stock Verlet's");
+            check(ours->worstStalls <= stockV.worstStalls + allowed, ours->name + ": a step with more host stalls than stock Verlet's");
+        }
+        check(oursL.stalls <= stockL.stalls && oursL.worstStalls <= stockL.worstStalls,
+              "RigidBodyLangevinIntegrator: more host stalls per step than stock LangevinMiddleIntegrator's");
+        check(oursV.launches <= stockV.launches + 2, "RigidBodyIntegrator: more than stock Verlet's launches + 2");
+        check(oursL.launches <= stockL.launches + 2, "RigidBodyLangevinIntegrator: more than stock Langevin's launches + 2");
+    }
+    catch (const std::exception& e) {
+        std::cout << "exception: " << e.what() << std::endl;
+        return 1;
+    }
+    std::cout << "Done" << std::endl;
+    return 0;
+}
