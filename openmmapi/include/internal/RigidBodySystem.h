@@ -150,10 +150,6 @@ public:
      * @param whole  on exit, getBodySize(b) positions in the body's order
      */
     void assemble(int b, const std::vector<OpenMM::Vec3>& positions, const StepGeometry& geometry, OpenMM::Vec3* whole) const;
-    /** The longest link of body b's assembly tree (see assemble()), in nm; 0 before it has its shape or for a single particle. */
-    double getLongestLink(int b) const {
-        return longestLink[b];
-    }
     /** The centre of mass sum_i m_i x_i / M of body b, with x_i = values[i] in the body's order. */
     Vector3 centreOfMass(int b, const OpenMM::Vec3* values) const;
     /** centreOfMass(b, values), with each x_i's offset from it in offsets (resized to the body's size). */
@@ -227,6 +223,7 @@ private:
     std::vector<Vector3> bodyCoordinates;
     /** Parallel to particles: body b's particles in the order assemble() places them, and the neighbour each is placed at (-1 for the first). */
     std::vector<int> assemblyOrder, assemblyNeighbour;
+    /** The longest link of each body's assembly tree, in nm (0 before it has its shape, or for a single particle). */
     std::vector<double> longestLink;
     std::vector<double> bodyMass;
     std::vector<RigidShape> shapes;
