@@ -15,6 +15,7 @@ from openmm import unit
 import openmmrigid
 import systems
 from openmmrigid.testing import randomRotation
+from openmmrigid.testing.stress import inertia_tensor
 from systems import make_context, positions_of
 
 PLATFORMS = systems.PLATFORMS
@@ -23,10 +24,7 @@ EDGE = 3.0  # nm
 
 def principalMoments(masses, coordinates):
     """The principal moments (ascending, amu nm^2) of point masses at these contiguous coordinates."""
-    masses = np.asarray(masses, dtype=float)
-    centred = coordinates - masses @ coordinates / masses.sum()
-    inertia = np.eye(3) * np.sum(masses * np.sum(centred**2, axis=1)) - np.einsum("i,ij,ik->jk", masses, centred, centred)
-    return np.linalg.eigvalsh(inertia)
+    return np.linalg.eigvalsh(inertia_tensor(np.asarray(masses, dtype=float), np.asarray(coordinates, dtype=float)))
 
 
 #: Box vectors (nm): a cube of edge EDGE, and a triclinic cell in OpenMM's reduced form with the same widths.
