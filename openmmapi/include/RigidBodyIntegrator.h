@@ -46,9 +46,9 @@ namespace OpenMMRigid {
  * constraint joining a body to anything else is an error. An AndersenThermostat, which redraws the
  * velocities of each constraint cluster, is an error at Context creation for an explicit body that
  * is not one constraint cluster (it would thermalise the body in parts, and cool it). Massless
- * virtual sites are placed from their parents after every move. Each body is assembled from the
- * periodic images of its particles nearest each other, so molecules split by the periodic boundary
- * in the positions given are fine.
+ * virtual sites are placed from their parents after every move. Each body is assembled from periodic
+ * images along its own shortest links, so molecules split by the periodic boundary in the positions
+ * given are fine, however far they reach from their first particle.
  *
  * Velocities are on-step. Every step writes the velocity v = V + omega x (r - R) of each body
  * particle back to the Context, so that reporters, State objects and barostats see consistent data.
