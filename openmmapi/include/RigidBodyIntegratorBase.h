@@ -97,14 +97,53 @@ public:
      */
     std::string getBodyKind(int index) const;
     /**
-     * Get the principal moments of inertia of a rigid body, in amu nm^2, in ascending order. Only
-     * available once the integrator is bound to a Context; for an explicit body, once positions have
-     * been set.
+     * Get the principal moments of inertia of a rigid body as the integrator moves it, in amu nm^2, in
+     * ascending order: those of its particles' masses, each nonzero one raised to
+     * getMinimumMomentOfInertia() where it is smaller (getBodyMassMoments() gives them unraised, in the
+     * same axes). Only available once the integrator is bound to a Context; for an explicit body, once
+     * positions have been set.
      *
      * @param index  the index of the body, from 0 to getNumBodies() - 1
      * @return the three principal moments, measured in amu nm^2
      */
     std::vector<double> getBodyMoments(int index) const;
+    /**
+     * Get the principal moments of inertia of a rigid body's particle masses, in amu nm^2, in the
+     * order of getBodyMoments(): the body's moments before any is raised. Available when
+     * getBodyMoments() is.
+     *
+     * @param index  the index of the body, from 0 to getNumBodies() - 1
+     * @return the three principal moments, measured in amu nm^2
+     */
+    std::vector<double> getBodyMassMoments(int index) const;
+    /**
+     * Get the smallest principal moment of inertia a body moves with (0, the default: every body moves
+     * with the moments of its particles' masses).
+     *
+     * @return the minimum moment, measured in amu nm^2
+     */
+    double getMinimumMomentOfInertia() const {
+        return minimumMoment;
+    }
+    /**
+     * Raise the moments of inertia of light bodies: every nonzero principal moment of a body that is
+     * smaller than this moves with this moment instead (the zero moment of a linear body stays zero).
+     * It is the rigid-body counterpart of hydrogen mass repartitioning: the distribution of positions
+     * (every configurational average: energies, densities, radial distribution functions) does not
+     * depend on the moments of inertia, while the librations of light molecules slow down, which
+     * allows a larger step. Each body keeps its mass, centre of mass, shape and forces; its particles
+     * keep moving rigidly, v_i = V + omega x r_i, with the angular velocity omega of the raised moments,
+     * and the kinetic energy and temperature the integrator reports are those of the raised moments, so
+     * that the thermostats work as before. The rotational dynamics (and, through the coupling of
+     * rotation and translation in a liquid, the diffusion) is slower: time correlation functions and
+     * transport properties are not those of the real molecules. For water (TIP3P moments 0.0062,
+     * 0.0115, 0.0177 amu nm^2), 0.04 makes every water a spherical top, whose exact free rotation is
+     * also the cheapest one. Set it before the integrator is bound to a Context.
+     *
+     * @param moment  the minimum moment, measured in amu nm^2 (0 for none)
+     * @throws OpenMMException if the moment is negative or not finite, or the integrator is bound to a Context
+     */
+    void setMinimumMomentOfInertia(double moment);
     /**
      * Get the kinetic energy of the translation of the bodies' centres of mass plus that of the free
      * particles. Only available once the integrator is bound to a Context.
@@ -169,6 +208,13 @@ protected:
         return false;
     }
     /**
+     * Velocities for Context.setVelocitiesToTemperature(): OpenMM's draw for every particle, with the
+     * angular velocity of each body whose moments are raised scaled by sqrt(I_k / I'_k) about each of
+     * its principal axes, so that its rotation is drawn from the Maxwell-Boltzmann distribution of the
+     * raised moments (the projection onto rigid motion keeps the angular velocity of the particles).
+     */
+    std::vector<OpenMM::Vec3> getVelocitiesForTemperature(const OpenMM::System& system, double temperature, int randomSeed) const;
+    /**
      * After the positions and velocities OpenMM writes: a header (format version, class name), the
      * seed and counter of the random numbers, and, if hasThermostatWork(), the thermostat's work.
      */
@@ -216,6 +262,7 @@ private:
     std::vector<std::vector<int> > bodies;
     bool explicitBodies;
     RotationMethod rotationMethod;
+    double minimumMoment;
     bool bound, forcesAreValid, needsProjection;
     /** The periodic box of the last force evaluation: setPeriodicBoxVectors() sends the integrator no notice. */
     OpenMM::Vec3 forcesBox[3];

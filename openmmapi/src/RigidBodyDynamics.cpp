@@ -24,6 +24,16 @@ Vec3 toVec3(const Vector3& v) {
     return Vec3(v[0], v[1], v[2]);
 }
 
+/** The momentum of body b from its particles' angular momentum l (lab frame), its moments raised or not (rigidRaiseAngularMomentum). */
+Vector3 bodyAngularMomentum(const RigidBodySystem& system, int b, const Matrix3& attitude, Vector3 l) {
+    double a[3][3];
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            a[i][j] = attitude[i][j];
+    rigidRaiseAngularMomentum(a, system.getInertiaScale(b), l.data());
+    return l;
+}
+
 } // namespace
 
 RigidBodyDynamics::RigidBodyDynamics(RigidBodySystem& system, HostThreads* threads, HostConstraints* constraints) :
@@ -147,8 +157,8 @@ void RigidBodyDynamics::projectBodyVelocities(int b, vector<Vec3>& velocities) {
         for (int k = 0; k < 3; k++)
             angularMomentum[k] += masses[members[i]]*moment[k];
     }
-    state.angularMomentum = angularMomentum;
-    Vector3 omega = multiplyTransposed(state.attitude, bodyAngularVelocity(b, multiply(state.attitude, angularMomentum)));
+    state.angularMomentum = bodyAngularMomentum(system, b, state.attitude, angularMomentum);
+    Vector3 omega = multiplyTransposed(state.attitude, bodyAngularVelocity(b, multiply(state.attitude, state.angularMomentum)));
     for (int i = 0; i < n; i++)
         velocities[members[i]] = toVec3(velocity) + toVec3(cross(omega, arms[i]));
 }
@@ -208,7 +218,7 @@ void RigidBodyDynamics::refreshMomenta(int b, const vector<Vec3>& positions, con
         angularMomentum += (positions[p] - toVec3(state.center)).cross(velocities[p] - velocity)*masses[p];
     }
     state.velocity = toVector(velocity);
-    state.angularMomentum = toVector(angularMomentum);
+    state.angularMomentum = bodyAngularMomentum(system, b, state.attitude, toVector(angularMomentum));
     for (int i = 0; i < n; i++)
         writtenVelocities[members[i]] = velocities[members[i]];
 }
@@ -432,9 +442,27 @@ void RigidBodyDynamics::computeKineticEnergies(const vector<Vec3>& velocities, d
         translational += 0.5*system.getBodyMass(b)*velocity.dot(velocity);
         const int n = system.getBodySize(b);
         const int* members = system.getBodyParticles(b);
-        for (int i = 0; i < n; i++) {
-            Vec3 relative = velocities[members[i]] - velocity;
-            rotational += 0.5*masses[members[i]]*relative.dot(relative);
+        const double* scale = system.getInertiaScale(b);
+        if (scale[0] == 1.0 && scale[1] == 1.0 && scale[2] == 1.0) {
+            for (int i = 0; i < n; i++) {
+                Vec3 relative = velocities[members[i]] - velocity;
+                rotational += 0.5*masses[members[i]]*relative.dot(relative);
+            }
+        }
+        else {
+            // Raised moments: the energy of the Hamiltonian integrated, sum L_k^2 / (2 I'_k), with L
+            // the body's momentum of the particles' rigid motion about the fitted body.
+            const BodyState& state = states[b];
+            const Matrix3 rotation = transpose(state.attitude);
+            const Vector3* coordinates = system.getBodyCoordinates(b);
+            Vector3 angularMomentum = {0.0, 0.0, 0.0};
+            for (int i = 0; i < n; i++) {
+                Vector3 moment = cross(multiply(rotation, coordinates[i]), toVector(velocities[members[i]] - velocity));
+                for (int k = 0; k < 3; k++)
+                    angularMomentum[k] += masses[members[i]]*moment[k];
+            }
+            Vector3 bodyMomentum = multiply(state.attitude, bodyAngularMomentum(system, b, state.attitude, angularMomentum));
+            rotational += rigidRotationalEnergy(system.getMoments(b), bodyMomentum.data());
         }
     }
     for (int p : system.getFreeParticles())
@@ -442,6 +470,11 @@ void RigidBodyDynamics::computeKineticEnergies(const vector<Vec3>& velocities, d
 }
 
 double RigidBodyDynamics::computeKineticEnergy(const vector<Vec3>& velocities) const {
+    if (system.hasRaisedMoments()) {
+        double translational, rotational;
+        computeKineticEnergies(velocities, translational, rotational);
+        return translational + rotational;
+    }
     const vector<double>& masses = system.getMasses();
     double energy = 0.0;
     for (size_t i = 0; i < masses.size(); i++)

@@ -3,6 +3,7 @@
 #include "internal/RigidBodyMolecules.h"
 #include "internal/RigidBodySystem.h"
 #include "internal/StepSequence.h"
+#include "numerics/SymmetricEigen.h"
 #include "openmm/AndersenThermostat.h"
 #include "openmm/Context.h"
 #include "openmm/OpenMMException.h"
@@ -66,13 +67,13 @@ void checkAndersenThermostat(const System& system, const vector<vector<int> >& b
 } // namespace
 
 RigidBodyIntegratorBase::RigidBodyIntegratorBase(const string& className, double stepSize) : className(className),
-        explicitBodies(false), rotationMethod(Exact), bound(false), forcesAreValid(false), needsProjection(true), loadedVelocityKick(0.0) {
+        explicitBodies(false), rotationMethod(Exact), minimumMoment(0.0), bound(false), forcesAreValid(false), needsProjection(true), loadedVelocityKick(0.0) {
     setStepSize(stepSize);
     setConstraintTolerance(1e-5);
 }
 
 RigidBodyIntegratorBase::RigidBodyIntegratorBase(const string& className, double stepSize, const vector<vector<int> >& bodies) :
-        className(className), bodies(bodies), explicitBodies(true), rotationMethod(Exact), bound(false),
+        className(className), bodies(bodies), explicitBodies(true), rotationMethod(Exact), minimumMoment(0.0), bound(false),
         forcesAreValid(false), needsProjection(true), loadedVelocityKick(0.0) {
     setStepSize(stepSize);
     setConstraintTolerance(1e-5);
@@ -93,6 +94,16 @@ void RigidBodyIntegratorBase::setRotationMethod(RotationMethod method) {
         throw OpenMMException(className + ": unknown rotation method " + to_string((int) method) + "; use " + className +
                 ".Exact (0) or " + className + ".NoSquish (1)");
     rotationMethod = method;
+}
+
+void RigidBodyIntegratorBase::setMinimumMomentOfInertia(double moment) {
+    if (!(isfinite(moment) && moment >= 0.0))
+        throw OpenMMException(className + ": the minimum moment of inertia is " + to_string(moment) +
+                " amu nm^2; it must be a finite number >= 0");
+    if (bound && moment != minimumMoment)
+        throw OpenMMException(className + ": the minimum moment of inertia cannot change once the integrator is bound to a "
+                "Context (the bodies' moments are set then); set it before creating the Context");
+    minimumMoment = moment;
 }
 
 RigidBodyIntegratorBase::~RigidBodyIntegratorBase() {
@@ -146,6 +157,65 @@ vector<double> RigidBodyIntegratorBase::getBodyMoments(int index) const {
     return vector<double>(moments, moments + 3);
 }
 
+vector<double> RigidBodyIntegratorBase::getBodyMassMoments(int index) const {
+    const double* moments = getShapedBody(index).getMassMoments(index);
+    return vector<double>(moments, moments + 3);
+}
+
+vector<Vec3> RigidBodyIntegratorBase::getVelocitiesForTemperature(const System& system, double temperature, int randomSeed) const {
+    vector<Vec3> velocities = Integrator::getVelocitiesForTemperature(system, temperature, randomSeed);
+    if (!bound || !topology->hasRaisedMoments())
+        return velocities;
+    // OpenMM draws each particle's velocity from its mass; projected onto rigid motion, a body's angular
+    // velocity about principal axis k then has the variance kT / I_k of its particles' moment I_k. The
+    // raised body needs kT / I'_k: the angular velocity about each axis is scaled by sqrt(I_k / I'_k).
+    // The axes are those of the body's particles as they are now (a fit to the shape would give the
+    // same ones, but the projection has not necessarily run yet); where moments are equal any axes in
+    // their plane do, since they are raised alike.
+    vector<Vec3> positions;
+    context->getPositions(positions);
+    const StepGeometry geometry = currentGeometry(*context, *topology);
+    vector<Vec3> whole;
+    vector<Vector3> centred, arms;
+    vector<double> masses;
+    for (int b = 0; b < topology->getNumBodies(); b++) {
+        const double* scale = topology->getInertiaScale(b);
+        if (!topology->isShapeKnown(b) || (scale[0] == 1.0 && scale[1] == 1.0 && scale[2] == 1.0))
+            continue;
+        const int n = topology->getBodySize(b);
+        const int* members = topology->getBodyParticles(b);
+        whole.resize(n);
+        topology->assemble(b, positions, geometry, whole.data());
+        topology->centreOfMass(b, whole.data(), centred);
+        const Vector3 velocity = topology->centreOfMass(b, velocities);
+        masses.resize(n);
+        Vector3 l = {0.0, 0.0, 0.0};
+        for (int i = 0; i < n; i++) {
+            masses[i] = topology->getMasses()[members[i]];
+            const Vector3 relative = {velocities[members[i]][0] - velocity[0], velocities[members[i]][1] - velocity[1],
+                                      velocities[members[i]][2] - velocity[2]};
+            const Vector3 moment = cross(centred[i], relative);
+            for (int k = 0; k < 3; k++)
+                l[k] += masses[i]*moment[k];
+        }
+        Vector3 principal;
+        Matrix3 axes;  // principal axes as columns: lab = axes body
+        principalAxes(centred, masses, principal, axes);
+        const Vector3 bodyL = multiplyTransposed(axes, l);
+        const double* mass = topology->getMassMoments(b);
+        Vector3 change = {0.0, 0.0, 0.0};
+        for (int k = 0; k < 3; k++)
+            if (mass[k] > 0.0)
+                change[k] = (bodyL[k]/mass[k])*(1.0/sqrt(scale[k]) - 1.0);
+        const Vector3 labChange = multiply(axes, change);
+        for (int i = 0; i < n; i++) {
+            const Vector3 extra = cross(labChange, centred[i]);
+            velocities[members[i]] += Vec3(extra[0], extra[1], extra[2]);
+        }
+    }
+    return velocities;
+}
+
 int RigidBodyIntegratorBase::getNumDegreesOfFreedom() const {
     // The rotational degrees of freedom of an explicit body depend on its shape (linear or not).
     for (int b = 0; b < getNumBodies(); b++)
@@ -178,7 +248,7 @@ void RigidBodyIntegratorBase::initialize(ContextImpl& contextRef) {
     context = &contextRef;
     owner = &contextRef.getOwner();
     try {
-        topology.reset(new RigidBodySystem(contextRef.getSystem(), bodies, explicitBodies, className));
+        topology.reset(new RigidBodySystem(contextRef.getSystem(), bodies, explicitBodies, className, minimumMoment));
         // Bodies found from constraints are whole clusters: only explicit ones can be split.
         if (explicitBodies)
             checkAndersenThermostat(contextRef.getSystem(), bodies, className);

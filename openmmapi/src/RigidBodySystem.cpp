@@ -72,9 +72,23 @@ void RigidBodySystem::setShape(int b, const vector<Vector3>& centred) {
             moment[k] = sum;
         }
     }
-    if (rigidClassifyMoments(moment.data(), &shape) != RigidStatusOk)
+    if (rigidClassifyMoments(moment.data(), &massMoments[b]) != RigidStatusOk)
         throw OpenMMException(className + ": body " + to_string(b) + " has principal moments " + to_string(moment[0]) + ", " +
                 to_string(moment[1]) + ", " + to_string(moment[2]) + ", which no rigid body has");
+    // Raised moments: every nonzero moment below the minimum is raised to it (a zero moment, the axis of
+    // a line, carries no motion and stays zero). The configurational distribution does not depend on
+    // the moments, only the dynamics does; the particles keep moving with v_i = V + omega x r_i.
+    shape = massMoments[b];
+    double raised[3];
+    bool raises = false;
+    for (int k = 0; k < 3; k++) {
+        raised[k] = (shape.moments[k] > 0.0 ? max(shape.moments[k], minimumMoment) : 0.0);
+        raises = raises || raised[k] != shape.moments[k];
+    }
+    if (raises && rigidClassifyMoments(raised, &shape) != RigidStatusOk)
+        throw OpenMMException(className + ": internal error: body " + to_string(b) + "'s raised moments cannot be classified");
+    for (int k = 0; k < 3; k++)
+        inertiaScale[3*b + k] = (massMoments[b].moments[k] > 0.0 ? shape.moments[k]/massMoments[b].moments[k] : 1.0);
     longestLink[b] = spanningTree(b, [&](int i, int j) {
         double sum = 0.0;
         for (int k = 0; k < 3; k++)
@@ -89,6 +103,13 @@ void RigidBodySystem::settleHandedness(int b, bool mirror) {
         for (int i = bodyStart[b]; i < bodyStart[b + 1]; i++)
             bodyCoordinates[i][2] = -bodyCoordinates[i][2];
     handednessOpen[b] = 0;
+}
+
+bool RigidBodySystem::hasRaisedMoments() const {
+    for (double scale : inertiaScale)
+        if (scale != 1.0)
+            return true;
+    return false;
 }
 
 bool RigidBodySystem::allShapesKnown() const {
@@ -335,12 +356,14 @@ void RigidBodySystem::addBody(const vector<int>& members) {
     bodyMass.push_back(0.0);
     RigidShape point = {RigidKindPoint, -1, {0.0, 0.0, 0.0}};
     shapes.push_back(point);
+    massMoments.push_back(point);
+    inertiaScale.insert(inertiaScale.end(), {1.0, 1.0, 1.0});
     shapeKnown.push_back(0);
     handednessOpen.push_back(0);
 }
 
 RigidBodySystem::RigidBodySystem(const System& system, const vector<vector<int> >& explicitBodies, bool useExplicit,
-                                 const string& className) : className(className) {
+                                 const string& className, double minimumMoment) : className(className), minimumMoment(minimumMoment) {
     const int numParticles = system.getNumParticles();
     masses.resize(numParticles);
     for (int i = 0; i < numParticles; i++)

@@ -37,12 +37,15 @@ QUANTITY_ARGUMENTS = {
                                                   ("stepSize", unit.picosecond)),
     ("RigidBodyLangevinIntegrator", "setTemperature"): (("temp", unit.kelvin),),
     ("RigidBodyLangevinIntegrator", "setFriction"): (("coeff", unit.picosecond**-1),),
+    ("RigidBodyIntegratorBase", "setMinimumMomentOfInertia"): (("moment", unit.amu * unit.nanometer**2),),
 }
 
 #: (class name, method name) -> the unit of the Quantity the method returns (the C++ returns the number
 #: in that unit).
 QUANTITY_RESULTS = {
     ("RigidBodyIntegratorBase", "getBodyMoments"): unit.amu * unit.nanometer**2,
+    ("RigidBodyIntegratorBase", "getBodyMassMoments"): unit.amu * unit.nanometer**2,
+    ("RigidBodyIntegratorBase", "getMinimumMomentOfInertia"): unit.amu * unit.nanometer**2,
     ("RigidBodyIntegratorBase", "getTranslationalKineticEnergy"): unit.kilojoule_per_mole,
     ("RigidBodyIntegratorBase", "getRotationalKineticEnergy"): unit.kilojoule_per_mole,
     ("RigidBodyIntegratorBase", "computeSystemTemperature"): unit.kelvin,

@@ -22,6 +22,7 @@ void serializeRigidIntegratorBase(const RigidBodyIntegratorBase& integrator, Ser
     node.setDoubleProperty("constraintTolerance", integrator.getConstraintTolerance());
     node.setIntProperty("integrationForceGroups", integrator.getIntegrationForceGroups());
     node.setIntProperty("rotationMethod", integrator.getRotationMethod());
+    node.setDoubleProperty("minimumMomentOfInertia", integrator.getMinimumMomentOfInertia());
     // An explicit empty list of bodies (every particle free) differs from "find the bodies in the
     // System", so the flag is written on its own, not inferred from the number of bodies.
     node.setBoolProperty("explicitBodies", integrator.hasExplicitBodies());
@@ -56,6 +57,8 @@ void deserializeRigidIntegratorSettings(const SerializationNode& node, RigidBody
     integrator.setIntegrationForceGroups(node.getIntProperty("integrationForceGroups", integrator.getIntegrationForceGroups()));
     int method = node.getIntProperty("rotationMethod", integrator.getRotationMethod());
     integrator.setRotationMethod(static_cast<RigidBodyIntegratorBase::RotationMethod>(method));
+    // Files written before the moments could be raised have none raised.
+    integrator.setMinimumMomentOfInertia(node.getDoubleProperty("minimumMomentOfInertia", 0.0));
 }
 
 } // namespace OpenMMRigid

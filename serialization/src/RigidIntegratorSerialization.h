@@ -4,7 +4,7 @@
 /*
  * What the serialization proxies of RigidBodyIntegrator and RigidBodyLangevinIntegrator share: the
  * settings of RigidBodyIntegratorBase (step size, constraint tolerance, integration force groups,
- * rotation method) and the explicit bodies,
+ * rotation method, minimum moment of inertia) and the explicit bodies,
  *
  *     explicitBodies="1"
  *     <Bodies>
@@ -21,7 +21,7 @@
 
 namespace OpenMMRigid {
 
-/** Write the step size, constraint tolerance, integration force groups, rotation method and explicit bodies. */
+/** Write the step size, constraint tolerance, integration force groups, rotation method, minimum moment of inertia and explicit bodies. */
 void serializeRigidIntegratorBase(const RigidBodyIntegratorBase& integrator, OpenMM::SerializationNode& node);
 
 /**
@@ -30,7 +30,7 @@ void serializeRigidIntegratorBase(const RigidBodyIntegratorBase& integrator, Ope
  */
 bool deserializeExplicitBodies(const OpenMM::SerializationNode& node, std::vector<std::vector<int> >& bodies);
 
-/** Read the constraint tolerance, integration force groups and rotation method, each with the integrator's value as default. */
+/** Read the constraint tolerance, integration force groups, rotation method (each with the integrator's value as default) and minimum moment of inertia (0 if absent). */
 void deserializeRigidIntegratorSettings(const OpenMM::SerializationNode& node, RigidBodyIntegratorBase& integrator);
 
 } // namespace OpenMMRigid

@@ -54,9 +54,10 @@ public:
      * @param explicitBodies  the bodies given to the integrator, or empty to find them from the constraints
      * @param useExplicit     whether explicitBodies is the list of bodies (it may legitimately be empty)
      * @param className       the class of the integrator the user made, which every message names
+     * @param minimumMoment   every nonzero principal moment below this (amu nm^2) is raised to it in the dynamics (0: none)
      */
     RigidBodySystem(const OpenMM::System& system, const std::vector<std::vector<int> >& explicitBodies, bool useExplicit,
-                    const std::string& className);
+                    const std::string& className, double minimumMoment = 0.0);
     /**
      * How far from a line, in nm, a body's particles may lie for the body to be linear: a body whose
      * particles are all within this distance of its axis of least moment, and within 1 % of its reach
@@ -104,10 +105,28 @@ public:
     }
     /**
      * The principal moments of inertia of body b, ascending, in amu nm^2 (zero for a point, the first
-     * zero for a line), as the dynamics uses them: those rigidClassifyMoments() found equal are equal.
+     * zero for a line), as the dynamics uses them: those rigidClassifyMoments() found equal are equal,
+     * and those below the minimum moment are raised to it.
      */
     const double* getMoments(int b) const {
         return shapes[b].moments;
+    }
+    /** The principal moments of body b's particle masses (classified as getMoments(), but never raised), in the same axes. */
+    const double* getMassMoments(int b) const {
+        return massMoments[b].moments;
+    }
+    /**
+     * For each principal axis of body b, getMoments(b)[k] / getMassMoments(b)[k] (1 on an axis of zero
+     * moment): what rigidRaiseAngularMomentum() takes from the particles' angular momentum to the body's.
+     */
+    const double* getInertiaScale(int b) const {
+        return &inertiaScale[3*b];
+    }
+    /** Whether any body's moments were raised (some getInertiaScale() is not 1). */
+    bool hasRaisedMoments() const;
+    /** The moment every nonzero principal moment is raised to, at least (0: none), in amu nm^2. */
+    double getMinimumMoment() const {
+        return minimumMoment;
     }
     /** Body b's kind (a RigidKind). */
     int getKind(int b) const {
@@ -226,7 +245,11 @@ private:
     /** The longest link of each body's assembly tree, in nm (0 before it has its shape, or for a single particle). */
     std::vector<double> longestLink;
     std::vector<double> bodyMass;
-    std::vector<RigidShape> shapes;
+    /** The moments of each body as the dynamics uses them (raised to minimumMoment), and those of its particles' masses. */
+    std::vector<RigidShape> shapes, massMoments;
+    /** 3 per body: getInertiaScale(). */
+    std::vector<double> inertiaScale;
+    double minimumMoment;
     std::vector<char> shapeKnown, handednessOpen;
     std::vector<std::vector<InternalConstraint> > internalConstraints;
     std::vector<int> freeParticles, bodyOfParticle;

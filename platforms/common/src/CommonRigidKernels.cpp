@@ -127,7 +127,7 @@ struct CommonIntegrateRigidBodyStepKernel::Impl {
     unique_ptr<IntegrationUtilities> solver;
     /** An UpdateStateDataKernel of the platform's own, to move positions and velocities between host and device without a notice. */
     Kernel stateData;
-    ComputeArray bodyStart, bodyParticles, bodyCoordinates, bodyParticleMass, bodyMass, shapes, freeParticles;
+    ComputeArray bodyStart, bodyParticles, bodyCoordinates, bodyParticleMass, bodyMass, shapes, inertiaScale, freeParticles;
     ComputeArray currentIndex, states, writtenVelocities, errorCode, errorData, energies, sums;
     ComputeArray startStates, startPosq, startPosqCorrection, startVelm;
     ComputeKernel updateAtomOrder, recordVelocities, kickDrift, kickDriftFree, finishFreeDrift, closingKick, kickFree;
@@ -394,6 +394,7 @@ void CommonIntegrateRigidBodyStepKernel::initialize(ContextImpl& context, RigidB
     // uploaded at each projection (uploadShapes()).
     d.bodyCoordinates.initialize<double>(cc, 3*particles.size(), "rigidBodyCoordinates");
     d.shapes.initialize(cc, max(1, d.numBodies), sizeof(RigidShape), "rigidBodyShapes");
+    d.inertiaScale.initialize<double>(cc, 3*max(1, d.numBodies), "rigidInertiaScale");
     d.states.initialize<double>(cc, RigidBodyDynamics::StateSize*max(1, d.numBodies), "rigidBodyStates");
     d.startStates.initialize<double>(cc, d.states.getSize(), "rigidBodyStartStates");
     d.writtenVelocities.initialize<double>(cc, 3*particles.size(), "rigidWrittenVelocities");
@@ -442,6 +443,7 @@ void CommonIntegrateRigidBodyStepKernel::initialize(ContextImpl& context, RigidB
         d.kickDrift->addArg();  // kick, drift, noSquish, displacementLimit (arguments 15 to 18)
     d.kickDrift->addArg(d.errorCode);
     d.kickDrift->addArg(d.errorData);
+    d.kickDrift->addArg(d.inertiaScale);
 
     d.solver.reset(bodies.getFreeConstraintSystem() != nullptr ? makeSolver(*bodies.getFreeConstraintSystem()) : nullptr);
     d.kickDriftFree = program->createKernel("rigidKickDriftFree");
@@ -519,7 +521,7 @@ void CommonIntegrateRigidBodyStepKernel::initialize(ContextImpl& context, RigidB
     d.kineticEnergies->addArg(d.numBodies);
     d.kineticEnergies->addArg(d.numFree);
     for (ArrayInterface* array : initializer_list<ArrayInterface*>{&d.bodyStart, &d.bodyParticles, &d.bodyParticleMass, &d.bodyMass, &d.freeParticles, &d.currentIndex,
-                                  &velm, &d.energies})
+                                  &velm, &d.energies, &d.bodyCoordinates, &d.shapes, &d.inertiaScale, &d.states})
         d.kineticEnergies->addArg(*array);
 
     d.sumPairs = program->createKernel("rigidSumPairs");
@@ -541,7 +543,7 @@ void CommonIntegrateRigidBodyStepKernel::initialize(ContextImpl& context, RigidB
     d.projectBodyVelocities->addArg(d.numBodies);
     for (ArrayInterface* array : initializer_list<ArrayInterface*>{&d.bodyStart, &d.bodyParticles, &d.bodyCoordinates,
                                   &d.bodyParticleMass, &d.bodyMass, &d.shapes, &d.currentIndex, &d.states, &d.writtenVelocities,
-                                  &velm, &d.projectionFailed})
+                                  &velm, &d.projectionFailed, &d.inertiaScale})
         d.projectBodyVelocities->addArg(*array);
 
     d.rebuildAtomOrder();
@@ -622,9 +624,14 @@ void CommonIntegrateRigidBodyStepKernel::project(ContextImpl& context) {
             coordinates[3*i + k] = d.bodies->getBodyCoordinates()[i][k];
     d.bodyCoordinates.upload(coordinates);
     vector<RigidShape> shapes(d.shapes.getSize());
-    for (int b = 0; b < d.numBodies; b++)
+    vector<double> scale(d.inertiaScale.getSize(), 1.0);
+    for (int b = 0; b < d.numBodies; b++) {
         shapes[b] = d.bodies->getShape(b);
+        for (int k = 0; k < 3; k++)
+            scale[3*b + k] = d.bodies->getInertiaScale(b)[k];
+    }
     d.shapes.upload(shapes);
+    d.inertiaScale.upload(scale);
     vector<double> flat;
     d.host->getStates(flat);
     flat.resize(d.states.getSize(), 0.0);
@@ -775,6 +782,12 @@ void CommonIntegrateRigidBodyStepKernel::computeKineticEnergies(ContextImpl& con
 
 double CommonIntegrateRigidBodyStepKernel::computeKineticEnergy(ContextImpl& context) {
     ContextSelector selector(cc);
+    if (impl->bodies->hasRaisedMoments()) {
+        // The energy of the Hamiltonian integrated: that of the raised moments, not sum m v^2 / 2.
+        double translational, rotational;
+        computeKineticEnergies(context, translational, rotational);
+        return translational + rotational;
+    }
     return cc.getIntegrationUtilities().computeKineticEnergy(0.0);
 }
 

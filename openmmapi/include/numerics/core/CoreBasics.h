@@ -137,4 +137,36 @@ RIGID_FUNCTION void rigidAngularVelocity(const double* moments, const double* an
         omega[k] = (moments[k] > 0.0 ? angularMomentum[k]/moments[k] : 0.0);
 }
 
+/**
+ * The angular momentum of a body whose principal moments were raised, from the angular momentum of its
+ * particles. The particles' velocities about the centre of mass, v_i - V = omega x r_i, carry the
+ * momentum l = sum_i m_i r_i x (v_i - V) = I omega, with I the moments of the particles' masses; the
+ * body moves with the raised moments I' and the same angular velocity, so its momentum is
+ * L = I' omega, in the principal frame L_k = s_k l_k with s_k = I'_k / I_k (1 on an axis of zero
+ * moment). l (lab frame) is replaced by L; the attitude a takes the lab frame to the principal frame.
+ * Where every s_k is 1 nothing is computed, so that bodies whose moments were not raised keep l bit
+ * for bit.
+ */
+RIGID_FUNCTION void rigidRaiseAngularMomentum(double a[3][3], const double* scale, double* l) {
+    double body[3];
+    int i;
+    if (scale[0] == 1.0 && scale[1] == 1.0 && scale[2] == 1.0)
+        return;
+    rigidMultiplyVector(a, l, body);
+    for (i = 0; i < 3; i++)
+        body[i] *= scale[i];
+    for (i = 0; i < 3; i++)
+        l[i] = a[0][i]*body[0] + a[1][i]*body[1] + a[2][i]*body[2];
+}
+
+/** The rotational kinetic energy sum_k L_k^2 / (2 I_k) of a body from its principal-frame angular momentum; a zero moment carries none. */
+RIGID_FUNCTION double rigidRotationalEnergy(const double* moments, const double* angularMomentum) {
+    double energy = 0.0;
+    int k;
+    for (k = 0; k < 3; k++)
+        if (moments[k] > 0.0)
+            energy += 0.5*angularMomentum[k]*angularMomentum[k]/moments[k];
+    return energy;
+}
+
 #endif /* OPENMMRIGID_CORE_BASICS_H_ */

@@ -156,10 +156,14 @@ DEVICE void rigidPlaceParticles(RigidBodyState* s, GLOBAL const double* bodyCoor
     }
 }
 
-/* The centre-of-mass velocity V and the angular momentum L = sum m_i A^T b_i x (v_i - V) of a body's particle velocities. */
+/*
+ * The centre-of-mass velocity V and the angular momentum l = sum m_i A^T b_i x (v_i - V) of a body's
+ * particle velocities, taken to the body's momentum L = I' omega where its moments were raised
+ * (rigidRaiseAngularMomentum with the body's three inertiaScale values; RigidBodyDynamics::projectBodyVelocities).
+ */
 DEVICE void rigidMomentaOfParticles(RigidBodyState* s, GLOBAL const double* bodyCoordinates, GLOBAL const int* bodyParticles,
         GLOBAL const double* bodyParticleMass, double mass, GLOBAL const int* currentIndex, int start, int end,
-        GLOBAL const mixed4* velm, double* com, double* l) {
+        GLOBAL const mixed4* velm, GLOBAL const double* inertiaScale, int b, double* com, double* l) {
     double arm[3], v[3], moment[3];
     int i, k;
     for (k = 0; k < 3; k++)
@@ -180,6 +184,8 @@ DEVICE void rigidMomentaOfParticles(RigidBodyState* s, GLOBAL const double* body
         for (k = 0; k < 3; k++)
             l[k] += moment[k]*bodyParticleMass[i];
     }
+    double scale[3] = {inertiaScale[3*b], inertiaScale[3*b + 1], inertiaScale[3*b + 2]};
+    rigidRaiseAngularMomentum(s->a, scale, l);
 }
 
 /* The total force and the torque about the centre, sum A^T b_i x f_i, on a body. */
@@ -256,7 +262,8 @@ KERNEL void rigidKickDrift(int numBodies, GLOBAL const int* RESTRICT bodyStart, 
         GLOBAL const double* RESTRICT bodyMass, GLOBAL const RigidShape* RESTRICT shapes, GLOBAL const int* RESTRICT currentIndex,
         GLOBAL double* RESTRICT states, GLOBAL double* RESTRICT writtenVelocities, GLOBAL real4* posq, GLOBAL real4* posqCorrection,
         GLOBAL const mixed4* RESTRICT velm, GLOBAL const mm_long* RESTRICT force, int paddedNumAtoms, double kick, double drift,
-        int noSquish, double displacementLimit, GLOBAL int* errorCode, GLOBAL double* errorData) {
+        int noSquish, double displacementLimit, GLOBAL int* errorCode, GLOBAL double* errorData,
+        GLOBAL const double* RESTRICT inertiaScale) {
     for (int b = GLOBAL_ID; b < numBodies; b += GLOBAL_SIZE) {
         RigidBodyState s;
         RigidShape shape = shapes[b];
@@ -278,7 +285,8 @@ KERNEL void rigidKickDrift(int numBodies, GLOBAL const int* RESTRICT bodyStart, 
                 writtenVelocities[3*i + 1] = v[1];
                 writtenVelocities[3*i + 2] = v[2];
             }
-            rigidMomentaOfParticles(&s, bodyCoordinates, bodyParticles, bodyParticleMass, mass, currentIndex, start, end, velm, s.v, s.l);
+            rigidMomentaOfParticles(&s, bodyCoordinates, bodyParticles, bodyParticleMass, mass, currentIndex, start, end, velm,
+                    inertiaScale, b, s.v, s.l);
         }
         if (kick != 0.0) {
             double total[3], torque[3];
@@ -523,13 +531,15 @@ KERNEL void rigidScaleFree(int numFree, GLOBAL const int* RESTRICT freeParticles
 
 /*
  * RigidBodyDynamics::computeKineticEnergies, per body and per free particle: energies[2 j] the
- * translational part (the centre of mass, or the free particle), energies[2 j + 1] the rest.
+ * translational part (the centre of mass, or the free particle), energies[2 j + 1] the rest (for a
+ * body with raised moments, sum L_k^2 / (2 I'_k) with L from rigidMomentaOfParticles).
  * Bodies take j = b, free particles j = numBodies + their index.
  */
 KERNEL void rigidKineticEnergies(int numBodies, int numFree, GLOBAL const int* RESTRICT bodyStart,
         GLOBAL const int* RESTRICT bodyParticles, GLOBAL const double* RESTRICT bodyParticleMass, GLOBAL const double* RESTRICT bodyMass,
         GLOBAL const int* RESTRICT freeParticles, GLOBAL const int* RESTRICT currentIndex, GLOBAL const mixed4* RESTRICT velm,
-        GLOBAL double* RESTRICT energies) {
+        GLOBAL double* RESTRICT energies, GLOBAL const double* RESTRICT bodyCoordinates, GLOBAL const RigidShape* RESTRICT shapes,
+        GLOBAL const double* RESTRICT inertiaScale, GLOBAL const double* RESTRICT states) {
     for (int j = GLOBAL_ID; j < numBodies + numFree; j += GLOBAL_SIZE) {
         double v[3];
         int i, k;
@@ -542,11 +552,23 @@ KERNEL void rigidKineticEnergies(int numBodies, int numFree, GLOBAL const int* R
             }
             for (k = 0; k < 3; k++)
                 com[k] /= bodyMass[j];
-            for (i = bodyStart[j]; i < bodyStart[j + 1]; i++) {
-                rigidReadVelocity(velm, currentIndex[bodyParticles[i]], v);
-                for (k = 0; k < 3; k++)
-                    v[k] -= com[k];
-                rotational += 0.5*bodyParticleMass[i]*(v[0]*v[0] + v[1]*v[1] + v[2]*v[2]);
+            if (inertiaScale[3*j] == 1.0 && inertiaScale[3*j + 1] == 1.0 && inertiaScale[3*j + 2] == 1.0) {
+                for (i = bodyStart[j]; i < bodyStart[j + 1]; i++) {
+                    rigidReadVelocity(velm, currentIndex[bodyParticles[i]], v);
+                    for (k = 0; k < 3; k++)
+                        v[k] -= com[k];
+                    rotational += 0.5*bodyParticleMass[i]*(v[0]*v[0] + v[1]*v[1] + v[2]*v[2]);
+                }
+            }
+            else {
+                RigidBodyState s;
+                RigidShape shape = shapes[j];
+                double momentumCom[3], l[3], bodyL[3];
+                rigidLoadState(states, j, &s);
+                rigidMomentaOfParticles(&s, bodyCoordinates, bodyParticles, bodyParticleMass, bodyMass[j], currentIndex, bodyStart[j],
+                        bodyStart[j + 1], velm, inertiaScale, j, momentumCom, l);
+                rigidMultiplyVector(s.a, l, bodyL);
+                rotational = rigidRotationalEnergy(shape.moments, bodyL);
             }
             energies[2*j] = 0.5*bodyMass[j]*(com[0]*com[0] + com[1]*com[1] + com[2]*com[2]);
             energies[2*j + 1] = rotational;
@@ -639,7 +661,7 @@ KERNEL void rigidProjectVelocities(int numBodies, GLOBAL const int* RESTRICT bod
         GLOBAL const double* RESTRICT bodyCoordinates, GLOBAL const double* RESTRICT bodyParticleMass,
         GLOBAL const double* RESTRICT bodyMass, GLOBAL const RigidShape* RESTRICT shapes, GLOBAL const int* RESTRICT currentIndex,
         GLOBAL double* RESTRICT states, GLOBAL double* RESTRICT writtenVelocities, GLOBAL mixed4* RESTRICT velm,
-        GLOBAL int* failed) {
+        GLOBAL int* failed, GLOBAL const double* RESTRICT inertiaScale) {
     if (failed[0])
         return;
     for (int b = GLOBAL_ID; b < numBodies; b += GLOBAL_SIZE) {
@@ -649,7 +671,8 @@ KERNEL void rigidProjectVelocities(int numBodies, GLOBAL const int* RESTRICT bod
         int k;
         const int start = bodyStart[b], end = bodyStart[b + 1];
         rigidLoadState(states, b, &s);
-        rigidMomentaOfParticles(&s, bodyCoordinates, bodyParticles, bodyParticleMass, bodyMass[b], currentIndex, start, end, velm, com, l);
+        rigidMomentaOfParticles(&s, bodyCoordinates, bodyParticles, bodyParticleMass, bodyMass[b], currentIndex, start, end, velm,
+                inertiaScale, b, com, l);
         if (!isfinite(com[0] + com[1] + com[2] + l[0] + l[1] + l[2])) {
             failed[1] = 1;
             continue;
