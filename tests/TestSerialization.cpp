@@ -49,6 +49,7 @@ void checkBaseSettings(const RigidBodyIntegratorBase& copy, const RigidBodyInteg
     ASSERT_EQUAL(original.getConstraintTolerance(), copy.getConstraintTolerance());
     ASSERT_EQUAL(original.getIntegrationForceGroups(), copy.getIntegrationForceGroups());
     ASSERT_EQUAL(original.getRotationMethod(), copy.getRotationMethod());
+    ASSERT_EQUAL(original.getMinimumMomentOfInertia(), copy.getMinimumMomentOfInertia());
     ASSERT_EQUAL(original.hasExplicitBodies(), copy.hasExplicitBodies());
     check(original.getExplicitBodies() == copy.getExplicitBodies(), "the explicit bodies survive the round trip");
 }
@@ -85,12 +86,14 @@ void testIntegratorSettings() {
             original.setConstraintTolerance(3e-7);
             original.setIntegrationForceGroups(37);
             original.setRotationMethod(RigidBodyIntegrator::NoSquish);
+            original.setMinimumMomentOfInertia(0.0375);
             original.setSplitting(splitting);
             if (thermostat)
                 original.setThermostat(251.5, 0.07);
             original.setRandomNumberSeed(12345);
             check(original.getConstraintTolerance() != defaults.getConstraintTolerance() &&
                   original.getIntegrationForceGroups() != defaults.getIntegrationForceGroups() &&
+                  original.getMinimumMomentOfInertia() != defaults.getMinimumMomentOfInertia() &&
                   original.getRandomNumberSeed() != defaults.getRandomNumberSeed(), "the settings differ from the defaults");
             checkSettings(*roundTrip<RigidBodyIntegrator>(original), original);
         }
@@ -117,6 +120,7 @@ void testLangevinSettings() {
         original->setIntegrationForceGroups(6);
         original->setRotationMethod(RigidBodyIntegrator::NoSquish);
         original->setRandomNumberSeed(-77);
+        original->setMinimumMomentOfInertia(0.021);
         checkSettings(*roundTrip<RigidBodyLangevinIntegrator>(*original), *original);
     }
 }
@@ -214,17 +218,19 @@ void expectXmlError(const string& text, const vector<string>& words) {
 }
 
 void testBadXml() {
-    expectXmlError("<Integrator stepSize=\".002\" type=\"RigidBodyIntegrator\" version=\"4\"/>",
-                   {"RigidBodyIntegrator", "version 4", "1 to 3"});
+    expectXmlError("<Integrator stepSize=\".002\" type=\"RigidBodyIntegrator\" version=\"5\"/>",
+                   {"RigidBodyIntegrator", "version 5", "1 to 4"});
     expectXmlError("<Integrator stepSize=\".002\" type=\"RigidBodyIntegrator\" version=\"0\"/>", {"RigidBodyIntegrator", "version 0"});
-    expectXmlError("<Integrator friction=\"1\" stepSize=\".002\" temperature=\"300\" type=\"RigidBodyLangevinIntegrator\" version=\"2\"/>",
-                   {"RigidBodyLangevinIntegrator", "version 2", "1 to 1"});
+    expectXmlError("<Integrator friction=\"1\" stepSize=\".002\" temperature=\"300\" type=\"RigidBodyLangevinIntegrator\" version=\"3\"/>",
+                   {"RigidBodyLangevinIntegrator", "version 3", "1 to 2"});
     expectXmlError("<Integrator splitting=\"9\" stepSize=\".002\" type=\"RigidBodyIntegrator\" version=\"3\"/>", {"unknown splitting 9"});
     expectXmlError("<Integrator rotationMethod=\"5\" stepSize=\".002\" type=\"RigidBodyIntegrator\" version=\"3\"/>", {"rotation method"});
     expectXmlError("<Integrator stepSize=\".002\" thermostat=\"1\" thermostatCollisionTime=\"-1\" thermostatTemperature=\"300\" "
                    "type=\"RigidBodyIntegrator\" version=\"3\"/>", {"collision time"});
     expectXmlError("<Integrator friction=\"-2\" stepSize=\".002\" temperature=\"300\" type=\"RigidBodyLangevinIntegrator\" version=\"1\"/>",
                    {"friction"});
+    expectXmlError("<Integrator minimumMomentOfInertia=\"-0.01\" stepSize=\".002\" type=\"RigidBodyIntegrator\" version=\"4\"/>",
+                   {"RigidBodyIntegrator", "minimum moment of inertia"});
 }
 
 int runSerializationTests(Platform& platform) {

@@ -33,7 +33,7 @@ GAS_CONSTANT = unit.MOLAR_GAS_CONSTANT_R.value_in_unit(unit.kilojoule_per_mole /
 def settings(integrator):
     """Every setting a copy must keep."""
     return (integrator.getStepSize(), integrator.getConstraintTolerance(), integrator.getIntegrationForceGroups(),
-            integrator.getRotationMethod(), integrator.getSplitting(), integrator.hasExplicitBodies(),
+            integrator.getRotationMethod(), integrator.getMinimumMomentOfInertia(), integrator.getSplitting(), integrator.hasExplicitBodies(),
             integrator.getExplicitBodies())
 
 
@@ -43,6 +43,7 @@ def configured(bodies):
     integrator.setConstraintTolerance(3e-7)
     integrator.setIntegrationForceGroups({0, 2, 5})
     integrator.setRotationMethod(RigidBodyIntegrator.NoSquish)
+    integrator.setMinimumMomentOfInertia(0.0125)
     integrator.setSplitting(RigidBodyIntegrator.Yoshida4)
     return integrator
 
@@ -278,8 +279,8 @@ def test_deepcopy_keeps_python_attributes():
 
 def test_xml_format():
     xml = openmm.XmlSerializer.serialize(configured([[0, 1, 2], [3]]))
-    assert 'type="RigidBodyIntegrator"' in xml and 'version="3"' in xml
-    for attribute in ("stepSize", "constraintTolerance", "integrationForceGroups", "rotationMethod", "splitting",
+    assert 'type="RigidBodyIntegrator"' in xml and 'version="4"' in xml
+    for attribute in ("stepSize", "constraintTolerance", "integrationForceGroups", "rotationMethod", "minimumMomentOfInertia", "splitting",
                       "thermostat", "thermostatTemperature", "thermostatCollisionTime", "randomSeed", "explicitBodies"):
         assert attribute + "=" in xml
     assert xml.count("<Body>") == 2 and xml.count("<Particle") == 4
@@ -297,7 +298,7 @@ def test_xml_defaults_for_older_files():
 
 
 def test_xml_errors():
-    newer = '<?xml version="1.0" ?>\n<Integrator stepSize=".004" type="RigidBodyIntegrator" version="4"/>\n'
+    newer = '<?xml version="1.0" ?>\n<Integrator stepSize=".004" type="RigidBodyIntegrator" version="5"/>\n'
     with pytest.raises(openmm.OpenMMException, match="version"):
         openmm.XmlSerializer.deserialize(newer)
     badMethod = '<?xml version="1.0" ?>\n<Integrator stepSize=".004" rotationMethod="5" type="RigidBodyIntegrator" version="1"/>\n'

@@ -37,7 +37,7 @@ def settings(integrator):
     """Every setting a copy must keep."""
     return (integrator.getTemperature(), integrator.getFriction(), integrator.getRandomNumberSeed(),
             integrator.getStepSize(), integrator.getConstraintTolerance(), integrator.getIntegrationForceGroups(),
-            integrator.getRotationMethod(), integrator.hasExplicitBodies(), integrator.getExplicitBodies())
+            integrator.getRotationMethod(), integrator.getMinimumMomentOfInertia(), integrator.hasExplicitBodies(), integrator.getExplicitBodies())
 
 
 def configured(bodies):
@@ -48,6 +48,7 @@ def configured(bodies):
     integrator.setConstraintTolerance(3e-7)
     integrator.setIntegrationForceGroups({0, 2, 5})
     integrator.setRotationMethod(RigidBodyLangevinIntegrator.NoSquish)
+    integrator.setMinimumMomentOfInertia(0.0125)
     return integrator
 
 
@@ -297,16 +298,16 @@ def test_copies_keep_every_setting(choice, method):
 
 def test_xml_format_and_versions():
     xml = openmm.XmlSerializer.serialize(configured([[0, 1, 2], [3]]))
-    assert 'type="RigidBodyLangevinIntegrator"' in xml and 'version="1"' in xml
+    assert 'type="RigidBodyLangevinIntegrator"' in xml and 'version="2"' in xml
     for attribute in ("temperature", "friction", "randomSeed", "stepSize", "constraintTolerance",
-                      "integrationForceGroups", "rotationMethod", "explicitBodies"):
+                      "integrationForceGroups", "rotationMethod", "minimumMomentOfInertia", "explicitBodies"):
         assert attribute + "=" in xml
     minimal = ('<?xml version="1.0" ?>\n<Integrator temperature="250" friction="3" stepSize=".004" '
                'type="RigidBodyLangevinIntegrator" version="1"/>\n')
     integrator = openmm.XmlSerializer.deserialize(minimal)
     assert type(integrator) is RigidBodyLangevinIntegrator
     assert settings(integrator) == settings(RigidBodyLangevinIntegrator(250, 3, 0.004))
-    for bad, words in (('version="2"', "version"), ('version="1" rotationMethod="4"', "rotation method")):
+    for bad, words in (('version="3"', "version"), ('version="1" rotationMethod="4"', "rotation method")):
         text = ('<?xml version="1.0" ?>\n<Integrator temperature="250" friction="3" stepSize=".004" '
                 f'type="RigidBodyLangevinIntegrator" {bad}/>\n')
         with pytest.raises(openmm.OpenMMException, match=words):

@@ -215,9 +215,14 @@ def cluster(seed=1, spacing=0.5, grid=(3, 3, 3), temperature=300.0, drift=(0.0, 
 
 
 class RigidMotion:
-    """The exact torque-free motion of one body, from its initial positions and velocities."""
+    """The exact torque-free motion of one body, from its initial positions and velocities.
 
-    def __init__(self, masses, positions, velocities):
+    With minimumMoment, the body moves as RigidBodyIntegratorBase.setMinimumMomentOfInertia() makes
+    it: every nonzero principal moment raised to at least minimumMoment, with the angular velocity
+    of the given velocities (its angular momentum is that of the raised moments).
+    """
+
+    def __init__(self, masses, positions, velocities, minimumMoment=0.0):
         masses = np.asarray(masses, dtype=float)
         self.centre = masses @ positions / masses.sum()
         self.velocity = masses @ velocities / masses.sum()
@@ -241,6 +246,7 @@ class RigidMotion:
             bodyOmega = np.array([0.0, bodyMomentum[1] / moments[1], bodyMomentum[2] / moments[2]])
         else:
             bodyOmega = bodyMomentum / moments
+        moments = np.where(moments > 0.0, np.maximum(moments, minimumMoment), 0.0)
         self.bodyCoordinates = relative @ attitude.T
         if linear:
             self.bodyCoordinates[:, 1:] = 0.0
@@ -257,10 +263,11 @@ class RigidMotion:
         return self.centre + self.velocity * t + relative, self.velocity + np.cross(labOmega, relative)
 
 
-def rigid_motion(masses, positions, velocities, bodies, free):
-    """A function t -> (positions, velocities) giving the exact free motion of every body and the
-    straight-line motion of every free particle."""
-    motions = [(body, RigidMotion(masses[body], positions[body], velocities[body])) for body in bodies]
+def rigid_motion(masses, positions, velocities, bodies, free, minimumMoment=0.0):
+    """A function t -> (positions, velocities) giving the exact free motion of every body (its
+    moments raised to minimumMoment, see RigidMotion) and the straight-line motion of every free
+    particle."""
+    motions = [(body, RigidMotion(masses[body], positions[body], velocities[body], minimumMoment)) for body in bodies]
 
     def at(t):
         r = np.array(positions, dtype=float)

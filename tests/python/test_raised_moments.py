@@ -1,0 +1,323 @@
+"""Raised moments of inertia (RigidBodyIntegratorBase.setMinimumMomentOfInertia), the rigid-body
+counterpart of hydrogen mass repartitioning:
+
+- the moments the dynamics uses are the particles' own with every nonzero one raised to the floor,
+  in the same axes; kinds follow (a water raised past its largest moment is a spherical top; the
+  zero moment of a linear body stays zero; a point stays a point);
+- a free body moves as the exact free rotor of the raised moments with the angular velocity of its
+  particles' velocities (openmmrigid.FreeRotor as an independent reference), on every platform;
+- every way of writing velocities keeps the angular velocity (setVelocities, a checkpoint loaded
+  into a new Context, the momenta rebuilt after a CMMotionRemover): velocities read back equal those
+  written, and the kinetic energy reported is that of the raised moments, sum L_k^2 / (2 I'_k) (a
+  projection that took the particles' angular momentum as the body's would drain the rotation);
+- setVelocitiesToTemperature() draws each body's rotation from the Maxwell-Boltzmann distribution of
+  the raised moments;
+- the configurational distribution does not change: dipoles in a uniform field sample <cos theta>
+  = coth(x) - 1/x with and without raised moments, and a water box reads the bath temperature in
+  translation and rotation with them;
+- energy is conserved without a thermostat, and bad values are refused with the class named.
+"""
+
+import io
+
+import numpy as np
+import openmm
+import openmm.unit as unit
+import pytest
+
+import systems
+from openmmrigid import RigidBodyIntegrator, RigidBodyLangevinIntegrator
+from test_langevin import BOLTZMANN, assert_water_temperatures, block_mean, small_water_box  # noqa: F401
+
+AMU_NM2 = unit.amu * unit.nanometer**2
+
+
+def raised(moments, floor):
+    moments = np.asarray(moments, dtype=float)
+    return np.where(moments > 0.0, np.maximum(moments, floor), 0.0)
+
+
+def body_omegas(masses, positions, velocities, bodies):
+    """Each body's angular velocity (lab frame) fitted to its particles' velocities, its principal
+    moments (ascending) and axes (columns), and its centre-of-mass velocity."""
+    result = []
+    for body in bodies:
+        m, x, v = masses[body], positions[body], velocities[body]
+        centre, velocity = m @ x / m.sum(), m @ v / m.sum()
+        r = x - centre
+        inertia = sum(mi * (ri @ ri * np.eye(3) - np.outer(ri, ri)) for mi, ri in zip(m, r))
+        moments, axes = np.linalg.eigh(inertia)
+        l = sum(mi * np.cross(ri, vi - velocity) for mi, ri, vi in zip(m, r, v))
+        bodyL = axes.T @ l
+        bodyOmega = np.where(moments > 1e-9 * moments[-1], bodyL / np.where(moments > 0, moments, 1.0), 0.0)
+        result.append((axes @ bodyOmega, moments, axes, velocity))
+    return result
+
+
+def kinetic_energy_of_raised(masses, positions, velocities, bodies, free, floor):
+    """sum M V^2 / 2 + sum_k I'_k omega_k^2 / 2 over the bodies, plus the free particles' m v^2 / 2."""
+    energy = 0.5 * np.sum(masses[free, None] * velocities[free] ** 2)
+    for body, (omega, moments, axes, velocity) in zip(bodies, body_omegas(masses, positions, velocities, bodies)):
+        bodyOmega = axes.T @ omega
+        energy += 0.5 * masses[body].sum() * velocity @ velocity
+        energy += 0.5 * np.sum(raised(np.where(moments > 1e-9 * moments[-1], moments, 0.0), floor) * bodyOmega**2)
+    return energy
+
+
+# ------------------------------------------------------------------------------------------------
+# The moments
+# ------------------------------------------------------------------------------------------------
+
+def test_moments_are_raised_to_the_floor_in_the_same_axes():
+    cluster = systems.cluster(seed=3, grid=(3, 3, 2), forces=False)
+    plain = RigidBodyIntegrator(0.001, cluster.bodies)
+    plainContext = systems.make_context(cluster.system, plain, "Reference")
+    plainContext.setPositions(cluster.positions)
+    floor = 0.012
+    integrator = RigidBodyIntegrator(0.001, cluster.bodies)
+    integrator.setMinimumMomentOfInertia(floor * AMU_NM2)
+    assert integrator.getMinimumMomentOfInertia().value_in_unit(AMU_NM2) == floor
+    context = systems.make_context(cluster.system, integrator, "Reference")
+    context.setPositions(cluster.positions)
+    kinds = set()
+    for b in range(integrator.getNumBodies()):
+        mass = np.array(integrator.getBodyMassMoments(b).value_in_unit(AMU_NM2))
+        assert np.array_equal(mass, plain.getBodyMoments(b).value_in_unit(AMU_NM2))
+        moments = np.array(integrator.getBodyMoments(b).value_in_unit(AMU_NM2))
+        np.testing.assert_allclose(moments, raised(mass, floor), rtol=1e-13, atol=0)
+        kind, plainKind = integrator.getBodyKind(b), plain.getBodyKind(b)
+        kinds.add(plainKind)
+        if plainKind in ("point", "linear"):
+            assert kind == plainKind
+        elif np.all(mass < floor):
+            assert kind == "spherical"
+        else:
+            assert kind == {3: "asymmetric", 2: "symmetric", 1: "spherical"}[len(set(np.round(moments / moments[-1], 12)))]
+    assert kinds >= {"point", "linear", "symmetric", "asymmetric", "spherical"}
+    # A water (the cluster's first body) raised past its largest moment is a spherical top.
+    water = RigidBodyIntegrator(0.001, cluster.bodies)
+    water.setMinimumMomentOfInertia(0.05)
+    waterContext = systems.make_context(cluster.system, water, "Reference")
+    waterContext.setPositions(cluster.positions)
+    assert water.getBodyKind(0) == "spherical" and water.getBodyMoments(0).value_in_unit(AMU_NM2) == [0.05] * 3
+
+
+def test_bad_minimum_moments_are_refused():
+    for integrator in (RigidBodyIntegrator(0.001), RigidBodyLangevinIntegrator(300, 1, 0.001)):
+        name = type(integrator).__name__
+        for bad in (-0.01, float("nan"), float("inf")):
+            with pytest.raises(openmm.OpenMMException, match=f"{name}: the minimum moment of inertia"):
+                integrator.setMinimumMomentOfInertia(bad)
+        assert integrator.getMinimumMomentOfInertia().value_in_unit(AMU_NM2) == 0.0
+    cluster = systems.cluster(seed=3, grid=(2, 2, 2), forces=False)
+    integrator = RigidBodyLangevinIntegrator(300, 1, 0.001, cluster.bodies)
+    integrator.setMinimumMomentOfInertia(0.02)
+    context = systems.make_context(cluster.system, integrator, "Reference")
+    context.setPositions(cluster.positions)
+    integrator.setMinimumMomentOfInertia(0.02)  # the same value: nothing changes
+    with pytest.raises(openmm.OpenMMException, match="RigidBodyLangevinIntegrator: the minimum moment of inertia cannot change"):
+        integrator.setMinimumMomentOfInertia(0.03)
+    integrator.step(2)
+    assert integrator.getMinimumMomentOfInertia().value_in_unit(AMU_NM2) == 0.02
+
+
+# ------------------------------------------------------------------------------------------------
+# Free motion, projections and kinetic energy
+# ------------------------------------------------------------------------------------------------
+
+FLOOR = 0.03
+
+
+@pytest.mark.parametrize("platform", systems.PLATFORMS)
+def test_free_bodies_move_as_the_exact_rotor_of_the_raised_moments(platform):
+    """No forces: after 40 steps of 5 fs every body is where the exact free rotor with the raised
+    moments and the particles' angular velocity puts it, and the velocities read back are those of
+    that rotor (not of the particles' moments: they differ by up to a factor 8 here)."""
+    cluster = systems.cluster(seed=4, grid=(2, 2, 2), forces=False)
+    exact = systems.rigid_motion(cluster.masses, cluster.positions, cluster.velocities, cluster.bodies, cluster.free,
+                                 minimumMoment=FLOOR)
+    unraised = systems.rigid_motion(cluster.masses, cluster.positions, cluster.velocities, cluster.bodies, cluster.free)
+    integrator = RigidBodyIntegrator(0.005, cluster.bodies)
+    integrator.setMinimumMomentOfInertia(FLOOR)
+    context = systems.make_context(cluster.system, integrator, platform)
+    context.setPositions(cluster.positions)
+    context.setVelocities(cluster.velocities)
+    double = platform in ("Reference", "CPU")
+    tolerance = 1e-9 if double else 1e-5
+    np.testing.assert_allclose(systems.velocities_of(context), cluster.velocities, atol=tolerance * 10, rtol=0)
+    integrator.step(40)
+    positions, velocities = exact(0.2)
+    assert np.max(np.abs(systems.positions_of(context) - positions)) < tolerance
+    assert np.max(np.abs(systems.velocities_of(context) - velocities)) < 10 * tolerance
+    assert np.max(np.abs(unraised(0.2)[0] - positions)) > 0.01
+
+
+@pytest.mark.parametrize("platform", systems.PLATFORMS)
+def test_velocities_and_kinetic_energy_with_raised_moments(platform):
+    """Rigid velocities set in the Context read back unchanged (the projection keeps the angular
+    velocity), and the kinetic energy (State, getTranslational/RotationalKineticEnergy, the
+    temperature) is that of the raised moments, computed here from the velocities with numpy."""
+    cluster = systems.cluster(seed=6, grid=(3, 3, 2))
+    integrator = RigidBodyLangevinIntegrator(300, 1, 0.001, cluster.bodies)
+    integrator.setMinimumMomentOfInertia(FLOOR)
+    context = systems.make_context(cluster.system, integrator, platform)
+    context.setPositions(cluster.positions)
+    context.setVelocities(cluster.velocities)
+    double = platform in ("Reference", "CPU")
+    np.testing.assert_allclose(systems.velocities_of(context), cluster.velocities, atol=1e-10 if double else 1e-5, rtol=0)
+    expected = kinetic_energy_of_raised(cluster.masses, cluster.positions, cluster.velocities, cluster.bodies, cluster.free, FLOOR)
+    particles = 0.5 * np.sum(cluster.masses[:, None] * cluster.velocities**2)
+    assert expected > 1.5 * particles  # raised moments: the test can tell the two apart
+    rtol = 1e-10 if double else 1e-5
+    state = context.getState(getEnergy=True)
+    assert state.getKineticEnergy().value_in_unit(unit.kilojoule_per_mole) == pytest.approx(expected, rel=rtol)
+    total = (integrator.getTranslationalKineticEnergy() + integrator.getRotationalKineticEnergy()).value_in_unit(unit.kilojoule_per_mole)
+    assert total == pytest.approx(expected, rel=rtol)
+    temperature = 2 * expected / (integrator.getNumDegreesOfFreedom() * BOLTZMANN)
+    assert integrator.computeSystemTemperature().value_in_unit(unit.kelvin) == pytest.approx(temperature, rel=rtol)
+
+
+def test_checkpoint_and_cmmotionremover_keep_the_raised_momenta():
+    """A checkpoint loaded into a new Context continues the trajectory (Reference: 1e-9 nm after 50
+    steps) with the same kinetic energy; with a CMMotionRemover, whose changes the step takes back into
+    the bodies' momenta from the particles, the energy of the raised moments is conserved."""
+    cluster = systems.cluster(seed=8, grid=(3, 3, 2), drift=(0.2, -0.1, 0.3))
+    cluster.system.addForce(openmm.CMMotionRemover(1))
+    integrator = RigidBodyIntegrator(0.001, cluster.bodies)
+    integrator.setMinimumMomentOfInertia(FLOOR)
+    context = systems.make_context(cluster.system, integrator, "Reference")
+    context.setPositions(cluster.positions)
+    context.setVelocities(cluster.velocities)
+    integrator.step(20)
+    first = context.getState(getEnergy=True)
+    checkpoint = context.createCheckpoint()
+    integrator.step(50)
+    last = context.getState(getEnergy=True, getPositions=True)
+    copy = RigidBodyIntegrator(0.001, cluster.bodies)
+    copy.setMinimumMomentOfInertia(FLOOR)
+    copyContext = systems.make_context(cluster.system, copy, "Reference")
+    copyContext.loadCheckpoint(checkpoint)
+    assert copyContext.getState(getEnergy=True).getKineticEnergy() / unit.kilojoule_per_mole == pytest.approx(
+        first.getKineticEnergy() / unit.kilojoule_per_mole, rel=1e-10)
+    copy.step(50)
+    assert np.max(np.abs(systems.positions_of(copyContext) - last.getPositions(asNumpy=True).value_in_unit(unit.nanometer))) < 1e-9
+    energy = lambda s: (s.getKineticEnergy() + s.getPotentialEnergy()).value_in_unit(unit.kilojoule_per_mole)
+    kinetic = first.getKineticEnergy().value_in_unit(unit.kilojoule_per_mole)
+    assert abs(energy(last) - energy(first)) < 1e-3 * kinetic
+
+
+def test_velocities_to_temperature_follow_the_raised_moments():
+    """setVelocitiesToTemperature(): about each principal axis, omega_k^2 I'_k / kT averages to 1
+    over 400 free waters (each axis within 4.5 standard errors of the chi-square mean; the particles'
+    own moments would give I'_k / I_k, 2.3 to 6.5 here)."""
+    waters = systems.cluster(seed=2, grid=(10, 8, 5), spacing=0.4, forces=False)
+    bodies = [b for b in waters.bodies if len(b) == 3 and np.allclose(sorted(waters.masses[b]), sorted(waters.masses[waters.bodies[0]]))]
+    temperature = 300.0
+    integrator = RigidBodyIntegrator(0.001, waters.bodies)
+    integrator.setMinimumMomentOfInertia(0.04)
+    context = systems.make_context(waters.system, integrator, "Reference")
+    context.setPositions(waters.positions)
+    context.setVelocitiesToTemperature(temperature, 5)
+    velocities = systems.velocities_of(context)
+    kT = BOLTZMANN * temperature
+    ratios = []
+    for omega, moments, axes, _ in body_omegas(waters.masses, systems.positions_of(context), velocities, bodies):
+        ratios.append((axes.T @ omega) ** 2 * raised(moments, 0.04) / kT)
+    ratios = np.array(ratios)
+    assert len(ratios) >= 300
+    mean = ratios.mean(axis=0)
+    error = np.sqrt(2.0 / len(ratios))
+    assert np.all(np.abs(mean - 1.0) < 4.5 * error), mean
+
+
+# ------------------------------------------------------------------------------------------------
+# What is sampled
+# ------------------------------------------------------------------------------------------------
+
+def dipoles_in_a_field(count=300, field=100.0, seed=9):
+    """count TIP3P-shaped waters (rigid by constraints) far apart, no interactions, in a uniform
+    field along z (kJ/mol/nm per unit charge) acting on their charges: each samples
+    p(cos theta) ~ exp(x cos theta), x = mu E / kT."""
+    rng = np.random.default_rng(seed)
+    oh, angle = 0.09572, np.radians(104.52)
+    template = np.array([[0.0, 0.0, 0.0], [oh, 0.0, 0.0], [oh * np.cos(angle), oh * np.sin(angle), 0.0]])
+    masses, charges = [15.99943, 1.007947, 1.007947], [-0.834, 0.417, 0.417]
+    system = openmm.System()
+    external = openmm.CustomExternalForce("-q*field*z")
+    external.addGlobalParameter("field", field)
+    external.addPerParticleParameter("q")
+    positions = []
+    side = int(np.ceil(count ** (1 / 3)))
+    for n in range(count):
+        site = np.array([n % side, (n // side) % side, n // side**2]) * 1.0
+        rotation = systems.randomRotation(rng)
+        first = system.getNumParticles()
+        for k in range(3):
+            system.addParticle(masses[k])
+            external.addParticle(first + k, [charges[k]])
+            positions.append(site + rotation @ template[k])
+        system.addConstraint(first, first + 1, oh)
+        system.addConstraint(first, first + 2, oh)
+        system.addConstraint(first + 1, first + 2, np.linalg.norm(template[1] - template[2]))
+    system.addForce(external)
+    dipole = np.array(charges) @ template
+    return system, np.array(positions), np.linalg.norm(dipole), dipole
+
+
+@pytest.mark.parametrize("floor", [0.0, 0.04])
+def test_dipoles_in_a_field_sample_the_same_orientations(floor):
+    """<cos theta> of 300 independent rigid dipoles in a field is the Langevin function
+    coth(x) - 1/x (x = mu E / kT = 1.96 here: 0.530) within 4.5 standard errors of the mean over the
+    bodies (each body's time average is one independent sample), with and without raised moments;
+    so is <cos^2 theta> = 1 - 2 <cos theta> / x."""
+    temperature = 300.0
+    system, positions, mu, dipole = dipoles_in_a_field()
+    x = mu * 100.0 / (BOLTZMANN * temperature)
+    integrator = RigidBodyLangevinIntegrator(temperature, 5.0, 0.004)
+    integrator.setMinimumMomentOfInertia(floor)
+    integrator.setRandomNumberSeed(17)
+    context = systems.make_context(system, integrator, "Reference")
+    context.setPositions(positions)
+    context.setVelocitiesToTemperature(temperature, 3)
+    integrator.step(500)
+    n = system.getNumParticles() // 3
+    charges = np.tile([-0.834, 0.417, 0.417], n)
+    cosines = []
+    for _ in range(300):
+        integrator.step(5)
+        p = systems.positions_of(context)
+        moments = (charges[:, None] * p).reshape(n, 3, 3).sum(axis=1)
+        cosines.append(moments[:, 2] / np.linalg.norm(moments, axis=1))
+    cosines = np.array(cosines)
+    expected = 1 / np.tanh(x) - 1 / x
+    perBody = cosines.mean(axis=0)
+    error = perBody.std(ddof=1) / np.sqrt(n)
+    print(f"floor {floor}: <cos> {perBody.mean():.4f} +- {error:.4f}, exact {expected:.4f}")
+    assert error < 0.02
+    assert abs(perBody.mean() - expected) < 4.5 * error
+    squares = (cosines**2).mean(axis=0)
+    squareError = squares.std(ddof=1) / np.sqrt(n)
+    assert abs(squares.mean() - (1 - 2 * expected / x)) < 4.5 * squareError
+
+
+def test_water_reads_the_bath_temperature_with_raised_moments(small_water_box):
+    """About 100 TIP3P waters, every moment raised to 0.04 amu nm^2 (spherical tops), 4 fs, friction
+    20/ps: the translational, rotational and reported temperatures are 300 K within 4.5 block
+    standard errors and 1.5 %."""
+    system, state = small_water_box
+    integrator = RigidBodyLangevinIntegrator(300 * unit.kelvin, 20 / unit.picosecond, 4 * unit.femtoseconds)
+    integrator.setMinimumMomentOfInertia(0.04 * AMU_NM2)
+    integrator.setRandomNumberSeed(23)
+    context = openmm.Context(system, integrator, *systems.platform_and_properties("CPU"))
+    context.setState(state)
+    integrator.step(500)
+    assert integrator.getBodyKind(0) == "spherical"
+    assert_water_temperatures(integrator, 300.0, samples=2500, every=2, blocks=20, label="raised moments: ", tolerance=0.015)
+
+
+def test_xml_keeps_the_minimum_moment():
+    integrator = RigidBodyLangevinIntegrator(300, 1, 0.004)
+    integrator.setMinimumMomentOfInertia(0.025)
+    copy = openmm.XmlSerializer.deserialize(openmm.XmlSerializer.serialize(integrator))
+    assert isinstance(copy, RigidBodyLangevinIntegrator)
+    assert copy.getMinimumMomentOfInertia().value_in_unit(AMU_NM2) == 0.025
