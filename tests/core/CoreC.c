@@ -105,6 +105,16 @@ void coreCNoSquish(const double* moments, double dt, double* attitude, double* a
     fromMatrix(a, attitude);
 }
 
+void coreCRaiseAngularMomentum(const double* attitude, const double* scale, double* l) {
+    double a[3][3];
+    toMatrix(attitude, a);
+    rigidRaiseAngularMomentum(a, scale, l);
+}
+
+double coreCRotationalEnergy(const double* moments, const double* angularMomentum) {
+    return rigidRotationalEnergy(moments, angularMomentum);
+}
+
 void coreCNormals(uint64_t seed, uint32_t stream, uint64_t step, int count, double* normals, double* uniform) {
     RigidNormalStream s;
     int n;

@@ -19,6 +19,8 @@ void coreCJacobi(double u, double m, double m1, double* sn, double* cn, double* 
 double coreCCarlsonRF(double x, double y, double z);
 double coreCCarlsonRJ(double x, double y, double z, double p);
 double coreCEllipticK(double m1);
+void coreCRaiseAngularMomentum(const double* attitude, const double* scale, double* l);
+double coreCRotationalEnergy(const double* moments, const double* angularMomentum);
 void coreCNoSquish(const double* moments, double dt, double* attitude, double* angularMomentum);
 void coreCNormals(uint64_t seed, uint32_t stream, uint64_t step, int count, double* normals, double* uniform);
 void coreCPhilox(const uint32_t* counter, const uint32_t* key, uint32_t* block);

@@ -256,6 +256,47 @@ void testNoSquishAndRandomNumbers() {
 }
 
 /** The constants the core writes out are the values its comments derive them from. */
+/**
+ * Raised moments: rigidRaiseAngularMomentum keeps the angular velocity (A L / I' equals A l / I to
+ * rounding, whatever the attitude), leaves l bit for bit when no moment is raised, and gives the same
+ * bits in C; rigidRotationalEnergy is sum L_k^2 / (2 I_k) with nothing on a zero moment.
+ */
+void testRaisedMoments() {
+    const Vector3 massMoments = {0.6, 1.2, 1.8};
+    for (const Vector3& raised : std::vector<Vector3>{{0.6, 1.2, 1.8}, {4.0, 4.0, 4.0}, {1.2, 1.2, 1.8}, {0.6, 5.0, 9.0}}) {
+        Vector3 scale;
+        for (int k = 0; k < 3; k++)
+            scale[k] = raised[k]/massMoments[k];
+        for (int trial = 0; trial < 5; trial++) {
+            Matrix3 attitude = RigidBodyTestSupport::randomRotation(normal);
+            double a[3][3], flat[9];
+            for (int i = 0; i < 3; i++)
+                for (int j = 0; j < 3; j++)
+                    a[i][j] = attitude[i][j];
+            copyAttitude(attitude, flat);
+            Vector3 l = {normal(), normal(), normal()};
+            Vector3 lCpp = l, lC = l;
+            rigidRaiseAngularMomentum(a, scale.data(), lCpp.data());
+            coreCRaiseAngularMomentum(flat, scale.data(), lC.data());
+            Vector3 before = multiply(attitude, l), after = multiply(attitude, lCpp);
+            for (int k = 0; k < 3; k++) {
+                assertSameBits(lCpp[k], lC[k], "raised L", __LINE__);
+                if (raised == massMoments)
+                    assertSameBits(l[k], lCpp[k], "unraised L", __LINE__);
+                ASSERT_EQUAL_TOL(before[k]/massMoments[k], after[k]/raised[k], 1e-14);
+            }
+            double expected = 0.0;
+            for (int k = 0; k < 3; k++)
+                expected += 0.5*after[k]*after[k]/raised[k];
+            ASSERT_EQUAL_TOL(expected, rigidRotationalEnergy(raised.data(), after.data()), 1e-15);
+            assertSameBits(rigidRotationalEnergy(raised.data(), after.data()), coreCRotationalEnergy(raised.data(), after.data()),
+                           "rotational energy", __LINE__);
+        }
+    }
+    const double linear[3] = {0.0, 2.0, 2.0}, momentum[3] = {5.0, 1.0, -2.0};
+    ASSERT_EQUAL_TOL(0.25 + 1.0, rigidRotationalEnergy(linear, momentum), 1e-15);
+}
+
 void testCoreConstants() {
     volatile double eps = std::numeric_limits<double>::epsilon();  // volatile: computed at run time, as the old code did
     assertSameBits(std::pow(3.0*eps, -1.0/8.0), rigidRFStopFactor(), "RF stop factor", __LINE__);
@@ -272,6 +313,7 @@ int main() {
         testRotor();
         testSpecialFunctions();
         testNoSquishAndRandomNumbers();
+        testRaisedMoments();
         std::cout << comparisons << " values identical in C and C++" << std::endl;
     }
     catch (const std::exception& e) {
