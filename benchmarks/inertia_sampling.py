@@ -1,0 +1,484 @@
+#!/usr/bin/env python
+"""Sampling speed with raised moments of inertia: ns/day at equal configurational accuracy, and what
+a user gets per wall-hour, for stock LangevinMiddleIntegrator + SETTLE (standard masses, and water
+hydrogens at 4 amu: the mass repartitioning any OpenMM user can do by hand) and
+RigidBodyLangevinIntegrator (standard moments, and moments raised with setMinimumMomentOfInertia).
+
+Systems: those of benchmarks/nvt_accuracy.py (500 rigid waters, amber14 TIP3P or TIP4P-Ew, PME 0.9 nm,
+ewaldErrorTolerance 5e-4, CMMotionRemover, 300 K, friction 1/ps; NPT: MonteCarloBarostat, 1 bar,
+every 25 steps), built, minimized and equilibrated as there. Each of `--starts` independent starts
+continues that state for 3 ps with stock at 2 fs and its own seed (start 0: the state itself); from
+each start, every configuration runs at each of its steps, with velocities drawn for its own masses and
+moments (setVelocitiesToTemperature): `--discard` ps discarded, then `--time` ps
+sampled every 0.1 ps (U per water, density, reported temperature; every frame the waters' atoms).
+
+Configurational error. The reference is the pooled 2 fs runs of stock and of the rigid integrator with
+standard moments (the same model; their difference is printed as a check). For each configuration,
+the bias of U per water against the step h (the mean over the starts, its error the starts' errors
+combined) is fitted, weighted, by a h^2 + b h^4 (the leading orders of a Langevin splitting's
+configurational error): the fit uses every step, so one 2-sigma fluctuation moves it little. The
+accurate step is the largest h, up to the largest step that ran stably from every start, where the
+fitted |bias| is at most `--tolerance` (0.1 kJ/mol per water: about the spread of independent 20 ps
+runs, 0.25 % of U). The plain rule of nvt_accuracy (largest step within 2 combined standard errors,
+every smaller step too) is given beside it.
+
+What a user gets, from the runs at each configuration's accurate step (the largest run step not
+above it): the oxygen self-diffusion coefficient D (slope of the mean-square displacement between
+lags of 1 and 5 ps, / 6), the rotational correlation time tau_1 of the molecular dipole axis
+(C_1(t) = <u(0).u(t)>, exponential fit where 0.15 < C_1 < 0.85), and the integrated autocorrelation
+time tau_U of U (samples 0.1 ps apart; Sokal's window, c = 5). ns/day is timed at the integer step
+below the accurate step, every configuration in turn in one process (`--timing-repetitions` blocks of
+`--timing-steps` steps, medians). Effective samples per wall-hour: simulated ps per hour / (2 tau_U).
+
+    python benchmarks/inertia_sampling.py --quick                  # smoke check, about 5 minutes
+    python benchmarks/inertia_sampling.py --systems tip3p-nvt --starts 2 --threads 2
+    python benchmarks/inertia_sampling.py --report                 # the report from the saved systems
+
+Results: benchmarks/results/inertia_sampling/<mode>/<system>.json and a log; a full run writes
+docs/results/inertia_sampling.md and docs/figures/inertia_sampling_<system>.png.
+"""
+
+import argparse
+import json
+import sys
+import time
+
+import numpy as np
+import openmm
+from openmm import app, unit
+
+import openmmrigid
+from benchmarking import (RESULTS as BENCHMARK_RESULTS, Progress, ResultsDocument, blockMean, nsPerDay, openLog,
+                          pyplot, say, stamp, timeInterleaved)
+from nvt_accuracy import (AMU_PER_NM3_IN_G_PER_ML, BOLTZMANN, FRICTION, SYSTEMS, TEMPERATURE, buildModel,
+                          equilibrate, stockDegreesOfFreedom, withoutBarostat)
+
+RESULTS = BENCHMARK_RESULTS/"inertia_sampling"
+SAMPLE_EVERY = 0.1          # ps
+HEAVY_HYDROGEN = 4.0        # amu: water hydrogens for stock's mass repartitioning, the oxygen lighter by as much
+WATER_SYSTEMS = [name for name in SYSTEMS if name != "protein"]
+
+
+def configurations(floors, quick):
+    """label -> (description, rigid, heavy hydrogens, minimum moment, steps in fs)."""
+    result = {
+        "stock": ("LangevinMiddleIntegrator + SETTLE", False, False, 0.0, [2, 4, 6, 8, 10]),
+        "stock-heavy": (f"LangevinMiddleIntegrator + SETTLE, water H {HEAVY_HYDROGEN:g} amu", False, True, 0.0, [4, 8, 10, 12, 14]),
+        "rigid": ("RigidBodyLangevinIntegrator", True, False, 0.0, [2, 4, 6, 8, 10]),
+    }
+    for floor in floors:
+        result[f"raised-{floor:g}"] = (f"RigidBodyLangevinIntegrator, moments >= {floor:g} amu nm^2", True, False, floor,
+                                       [4, 8, 12, 14, 16, 18])
+    if quick:
+        result = {label: spec[:4] + ([s for s in spec[4] if s in (2, 8, 12)] or spec[4][:1],) for label, spec in result.items()}
+    return result
+
+
+def heavyHydrogens(system, topology):
+    """A copy of the System with every water hydrogen at HEAVY_HYDROGEN amu and its oxygen lighter by as much."""
+    copy = openmm.XmlSerializer.deserialize(openmm.XmlSerializer.serialize(system))
+    for residue in topology.residues():
+        if residue.name != "HOH":
+            continue
+        atoms = list(residue.atoms())
+        oxygen = next(atom.index for atom in atoms if atom.element == app.element.oxygen)
+        for atom in atoms:
+            if atom.element == app.element.hydrogen:
+                moved = HEAVY_HYDROGEN - copy.getParticleMass(atom.index).value_in_unit(unit.dalton)
+                copy.setParticleMass(atom.index, HEAVY_HYDROGEN)
+                copy.setParticleMass(oxygen, copy.getParticleMass(oxygen).value_in_unit(unit.dalton) - moved)
+    return copy
+
+
+def makeIntegrator(spec, stepFs, seed):
+    _, rigid, _, floor, _ = spec
+    dt = stepFs*unit.femtoseconds
+    if rigid:
+        integrator = openmmrigid.RigidBodyLangevinIntegrator(TEMPERATURE, FRICTION, dt)
+        integrator.setMinimumMomentOfInertia(floor)
+    else:
+        integrator = openmm.LangevinMiddleIntegrator(TEMPERATURE, FRICTION, dt)
+    integrator.setRandomNumberSeed(seed)
+    return integrator
+
+
+class Waters:
+    """The atoms of the waters: oxygens and each water's two hydrogens."""
+
+    def __init__(self, topology):
+        self.oxygens, self.hydrogens = [], []
+        for residue in topology.residues():
+            if residue.name == "HOH":
+                atoms = list(residue.atoms())
+                self.oxygens.append(next(a.index for a in atoms if a.element == app.element.oxygen))
+                self.hydrogens.append([a.index for a in atoms if a.element == app.element.hydrogen])
+        self.oxygens, self.hydrogens = np.array(self.oxygens), np.array(self.hydrogens)
+        self.count = len(self.oxygens)
+
+
+def simulate(system, state, waters, spec, stepFs, seed, npt, discard, production, platform, properties):
+    """One run: the samples, the oxygen positions and dipole axes of every sample, and a failure message."""
+    if npt:
+        system.getForce(system.getNumForces() - 1).setRandomNumberSeed(seed + 1)
+    integrator = makeIntegrator(spec, stepFs, seed)
+    context = openmm.Context(system, integrator, platform, properties)
+    context.setState(state)
+    # Fresh velocities for this configuration's masses and moments: those of the start, drawn for the
+    # particles' own, would give raised moments a rotational temperature I'/I times too high.
+    context.setVelocitiesToTemperature(TEMPERATURE, seed)
+    dof = integrator.getNumDegreesOfFreedom() if spec[1] else stockDegreesOfFreedom(system)
+    totalMass = sum(system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles()))
+    dtPs = stepFs/1000
+    perSample = max(1, int(round(SAMPLE_EVERY/dtPs)))
+    samples = int(round(production/(perSample*dtPs)))
+    discardSteps = int(round(discard/dtPs))
+    data = {"potential": [], "density": [], "temperature": []}
+    oxygens, axes, boxes = [], [], []
+    progress = Progress(f"{spec[0]} {stepFs:g} fs", discardSteps + samples*perSample)
+    failure = ""
+    try:
+        integrator.step(discardSteps)
+        progress.update(discardSteps)
+        for sample in range(samples):
+            integrator.step(perSample)
+            current = context.getState(getEnergy=True, getPositions=True)
+            potential = current.getPotentialEnergy().value_in_unit(unit.kilojoule_per_mole)/waters.count
+            kinetic = current.getKineticEnergy().value_in_unit(unit.kilojoule_per_mole)
+            if not (np.isfinite(potential) and np.isfinite(kinetic)) or potential > 0:
+                failure = f"energy {potential:.3g} kJ/mol per water after {discard + (sample + 1)*perSample*dtPs:.2f} ps"
+                break
+            box = current.getPeriodicBoxVectors(asNumpy=True).value_in_unit(unit.nanometer)
+            positions = current.getPositions(asNumpy=True).value_in_unit(unit.nanometer)
+            data["potential"].append(potential)
+            data["density"].append(totalMass/np.linalg.det(box)*AMU_PER_NM3_IN_G_PER_ML)
+            data["temperature"].append(2*kinetic/(dof*BOLTZMANN))
+            oxygen = positions[waters.oxygens]
+            axis = positions[waters.hydrogens].mean(axis=1) - oxygen
+            oxygens.append(oxygen)
+            axes.append(axis/np.linalg.norm(axis, axis=1)[:, None])
+            boxes.append(np.diag(box).copy())
+            progress.update(discardSteps + (sample + 1)*perSample)
+    except openmm.OpenMMException as error:
+        failure = str(error).splitlines()[0][:160]
+    return data, np.array(oxygens), np.array(axes), np.array(boxes), failure
+
+
+# ---------------------------------------------------------------------------------------------------
+# Dynamics from the samples
+# ---------------------------------------------------------------------------------------------------
+
+
+def diffusion(oxygens, boxes):
+    """D in 1e-5 cm^2/s from the oxygens' MSD (unwrapped by minimum-image steps between samples), lags 1 to 5 ps."""
+    steps = np.diff(oxygens, axis=0)
+    steps -= boxes[1:, None, :]*np.round(steps/boxes[1:, None, :])
+    path = np.concatenate([np.zeros((1,) + oxygens.shape[1:]), np.cumsum(steps, axis=0)])
+    lags = np.arange(int(1.0/SAMPLE_EVERY), min(int(5.0/SAMPLE_EVERY), len(path)//2) + 1)
+    if len(lags) < 2:
+        return float("nan")
+    msd = [np.mean(np.sum((path[lag:] - path[:-lag])**2, axis=-1)) for lag in lags]
+    slope = np.polyfit(lags*SAMPLE_EVERY, msd, 1)[0]    # nm^2/ps
+    return float(slope/6*1e2)                            # 1 nm^2/ps = 1e-2 cm^2/s
+
+
+def rotationalTime(axes):
+    """tau_1 (ps) of the dipole axis: exponential fit of C_1(t) where 0.15 < C_1 < 0.85."""
+    maxLag = min(len(axes)//2, int(10.0/SAMPLE_EVERY))
+    c = np.array([1.0] + [np.mean(np.sum(axes[lag:]*axes[:-lag], axis=-1)) for lag in range(1, maxLag)])
+    use = (c > 0.15) & (c < 0.85)
+    if use.sum() < 2:
+        return float("nan")
+    t = np.arange(len(c))*SAMPLE_EVERY
+    return float(-1/np.polyfit(t[use], np.log(c[use]), 1)[0])
+
+
+def autocorrelationTime(values):
+    """Integrated autocorrelation time (ps) of a series sampled every SAMPLE_EVERY: 1/2 + sum rho(k),
+    summed up to the first k >= 5 tau (Sokal's window)."""
+    x = np.asarray(values) - np.mean(values)
+    n = len(x)
+    spectrum = np.fft.rfft(x, 2*n)
+    rho = np.fft.irfft(spectrum*np.conj(spectrum))[:n]
+    rho /= rho[0]
+    tau = 0.5
+    for k in range(1, n):
+        tau += rho[k]
+        if k >= 5*tau:
+            break
+    return float(tau*SAMPLE_EVERY)
+
+
+# ---------------------------------------------------------------------------------------------------
+# One system
+# ---------------------------------------------------------------------------------------------------
+
+
+def runSystem(name, args, platform, properties):
+    spec = SYSTEMS[name]
+    started = time.perf_counter()
+    topology, positions, nptSystem = buildModel(spec["model"], False)
+    stamp(f"{name}: {spec['title']}: minimizing and equilibrating {args.equilibrate:g} ps (stock, 2 fs)")
+    state = equilibrate(nptSystem, positions, platform, properties, args.equilibrate)
+    system = nptSystem if spec["npt"] else withoutBarostat(nptSystem)
+    heavy = heavyHydrogens(system, topology)
+    waters = Waters(topology)
+    configs = configurations(args.floors, args.quick)
+    starts = [state]
+    for start in range(1, args.starts):
+        integrator = openmm.LangevinMiddleIntegrator(TEMPERATURE, FRICTION, 2*unit.femtoseconds)
+        integrator.setRandomNumberSeed(start)
+        context = openmm.Context(system, integrator, platform, properties)
+        context.setState(state)
+        context.setVelocitiesToTemperature(TEMPERATURE, start)
+        integrator.step(1500)
+        starts.append(context.getState(getPositions=True, getVelocities=True))
+    runs = []
+    for index, (label, config) in enumerate(configs.items()):
+        for start, startState in enumerate(starts):
+            failed = False
+            for stepFs in config[4]:
+                if failed:
+                    runs.append(dict(config=label, step=stepFs, start=start, failure="not run (unstable at a smaller step)"))
+                    continue
+                seed = 1000*start + 10*index + config[4].index(stepFs) + 1
+                data, oxygens, axes, boxes, failure = simulate(heavy if config[2] else system, startState, waters, config,
+                                                               stepFs, seed, spec["npt"], args.discard, args.time, platform,
+                                                               properties)
+                run = dict(config=label, step=stepFs, start=start, failure=failure)
+                if failure or len(data["potential"]) < 20:
+                    run["failure"] = failure or "too few samples"
+                    failed = True
+                    say(f"  {label} {stepFs:g} fs start {start}: unstable ({run['failure']})")
+                else:
+                    run.update({key: [float(v) for v in blockMean(values)] for key, values in data.items()})
+                    run.update(D=diffusion(oxygens, boxes), tauRot=rotationalTime(axes),
+                               tauU=autocorrelationTime(data["potential"]))
+                    say(f"  {label} {stepFs:g} fs start {start}: U/water {run['potential'][0]:.3f} +- {run['potential'][1]:.3f}, "
+                        f"T {run['temperature'][0]:.1f} K, D {run['D']:.2f}, tau_1 {run['tauRot']:.2f} ps, tau_U {run['tauU']:.2f} ps")
+                runs.append(run)
+    result = dict(name=name, title=spec["title"], npt=spec["npt"], waters=waters.count, runs=runs,
+                  configs={label: list(config) for label, config in configs.items()}, tolerance=args.tolerance)
+    analyse(result)
+    stamp(f"{name}: accurate steps " + ", ".join(f"{label} {entry['accurateStep']}" for label, entry in result["summary"].items())
+          + "; timing")
+    timing(result, system, heavy, state, configs, platform, properties, args)
+    result["seconds"] = time.perf_counter() - started
+    return result
+
+
+def pooled(runs, key):
+    """Mean over the starts of a run's (mean, error) and the combined error."""
+    values = [run[key] for run in runs]
+    return float(np.mean([v[0] for v in values])), float(np.sqrt(sum(v[1]**2 for v in values))/len(values))
+
+
+def analyse(result):
+    runs = result["runs"]
+    keys = ("potential", "density") if result["npt"] else ("potential",)
+    good = lambda label, step: [r for r in runs if r["config"] == label and r["step"] == step and not r["failure"]]
+    reference = {key: [] for key in keys}
+    for label in ("stock", "rigid"):
+        if good(label, 2):
+            for key in keys:
+                reference[key].append(pooled(good(label, 2), key))
+    reference = {key: (float(np.mean([v[0] for v in values])), float(np.sqrt(sum(v[1]**2 for v in values))/len(values)))
+                 for key, values in reference.items() if values}
+    result["reference"] = reference
+    if len(good("stock", 2)) and len(good("rigid", 2)):
+        a, b = pooled(good("stock", 2), "potential"), pooled(good("rigid", 2), "potential")
+        result["referenceCheck"] = [a[0] - b[0], float(np.hypot(a[1], b[1]))]
+    summary = {}
+    for label, config in result["configs"].items():
+        starts = len({r["start"] for r in runs})
+        points = []
+        for step in config[4]:
+            done = good(label, step)
+            if len(done) < starts:
+                break
+            entry = dict(step=step)
+            for key in keys:
+                mean, error = pooled(done, key)
+                entry[key] = [mean, error, mean - reference[key][0], float(np.hypot(error, reference[key][1]))]
+            for key in ("temperature",):
+                entry[key] = list(pooled(done, key))
+            for key in ("D", "tauRot", "tauU"):
+                entry[key] = float(np.mean([r[key] for r in done]))
+            points.append(entry)
+        largestStable = points[-1]["step"] if points else None
+        fit = fitBias(points) if points else None
+        accurate = accurateStep(fit, points, result["tolerance"]) if points else None
+        plain = None
+        for entry in points:
+            if entry["step"] != 2 and any(abs(entry[key][2]) >= 2*entry[key][3] for key in keys):
+                break
+            plain = entry["step"]
+        summary[label] = dict(points=points, largestStable=largestStable, fit=fit, accurateStep=accurate, plainStep=plain)
+    result["summary"] = summary
+
+
+def fitBias(points):
+    """Weighted least squares of bias(h) = a h^2 + b h^4 (h in fs) through the points: [a, b]."""
+    h = np.array([p["step"] for p in points], dtype=float)
+    bias = np.array([p["potential"][2] for p in points])
+    error = np.array([p["potential"][3] for p in points])
+    design = np.stack([h**2, h**4], axis=1)/error[:, None]
+    if len(h) < 2:
+        design = design[:, :1]
+    coefficients = np.linalg.lstsq(design, bias/error, rcond=None)[0]
+    return [float(c) for c in coefficients] + [0.0]*(2 - len(coefficients))
+
+
+def accurateStep(fit, points, tolerance):
+    """The largest h (0.1 fs grid), up to the largest stable step, with |a h^2 + b h^4| <= tolerance."""
+    best = None
+    for h in np.arange(1.0, points[-1]["step"] + 1e-9, 0.1):
+        if abs(fit[0]*h**2 + fit[1]*h**4) > tolerance:
+            break
+        best = round(float(h), 1)
+    return best
+
+
+def timing(result, system, heavy, state, configs, platform, properties, args):
+    """ns/day of each configuration at the integer step at or below its accurate step, interleaved."""
+    integrators, contexts = {}, []
+    for label, config in configs.items():
+        step = result["summary"][label]["accurateStep"]
+        if not step:
+            continue
+        step = int(np.floor(step))
+        integrator = makeIntegrator(config, step, 5)
+        context = openmm.Context(heavy if config[2] else system, integrator, platform, properties)
+        context.setState(state)
+        integrators[(label, step)] = integrator
+        contexts.append(context)
+    wall, _ = timeInterleaved(integrators, args.timing_steps, args.timing_repetitions)
+    for (label, step), seconds in wall.items():
+        entry = result["summary"][label]
+        entry["timedStep"] = step
+        entry["msPerStep"] = 1000*float(np.median(seconds))
+        entry["nsPerDay"] = nsPerDay(step, float(np.median(seconds)))
+        near = [p for p in entry["points"] if p["step"] <= entry["accurateStep"]]
+        run = near[-1] if near else entry["points"][0]
+        entry["atStep"] = dict(step=run["step"], D=run["D"], tauRot=run["tauRot"], tauU=run["tauU"])
+        psPerHour = entry["nsPerDay"]*1000/24
+        entry["samplesPerHour"] = psPerHour/(2*run["tauU"])
+        entry["rotationsPerHour"] = psPerHour/run["tauRot"]
+        say(f"  {label} at {step} fs: {entry['msPerStep']:.2f} ms/step, {entry['nsPerDay']:.1f} ns/day")
+
+
+# ---------------------------------------------------------------------------------------------------
+# Report
+# ---------------------------------------------------------------------------------------------------
+
+
+def report(results, quick):
+    document = ResultsDocument("inertia_sampling", "Sampling speed with raised moments of inertia", quick=quick,
+                               about=__doc__.split("\n\n")[0].replace("\n", " "))
+    for result in results:
+        document.section(result["title"])
+        reference = result["reference"]["potential"]
+        check = result.get("referenceCheck")
+        document.text(f"Reference U/water {reference[0]:.3f} +- {reference[1]:.3f} kJ/mol (pooled 2 fs runs"
+                      + (f"; stock - rigid at 2 fs: {check[0]:+.3f} +- {check[1]:.3f}" if check else "") + "). "
+                      f"Tolerance {result['tolerance']:g} kJ/mol per water; {len({r['start'] for r in result['runs']})} "
+                      f"starts of {result['waters']} waters; wall time {result.get('seconds', 0)/60:.0f} min.")
+        rows = []
+        for label, entry in result["summary"].items():
+            for p in entry["points"]:
+                rows.append([label, f"{p['step']:g}", f"{p['potential'][0]:.3f} +- {p['potential'][1]:.3f}",
+                             f"{p['potential'][2]:+.3f} ({p['potential'][2]/p['potential'][3]:+.1f} sigma)",
+                             f"{p['temperature'][0]:.1f}", f"{p['D']:.2f}", f"{p['tauRot']:.2f}", f"{p['tauU']:.2f}"])
+            failures = sorted({(r["step"], r["failure"]) for r in result["runs"] if r["config"] == label and r["failure"]})
+            for step, failure in failures[:1]:
+                rows.append([label, f"{step:g}", "unstable: " + failure[:70], "", "", "", "", ""])
+        document.table(["configuration", "step (fs)", "U/water (kJ/mol)", "bias", "T (K)", "D (1e-5 cm^2/s)", "tau_1 (ps)",
+                        "tau_U (ps)"], rows)
+        stock = result["summary"]["stock"].get("nsPerDay")
+        heavy = result["summary"]["stock-heavy"].get("nsPerDay")
+        rows = []
+        for label, entry in result["summary"].items():
+            if "nsPerDay" not in entry:
+                rows.append([label, "-", "-", "-", "-", "-", "-", "-", "-"])
+                continue
+            at = entry["atStep"]
+            rows.append([label, f"{entry['accurateStep']:g}", f"{entry['plainStep']}", f"{entry['timedStep']}",
+                         f"{entry['nsPerDay']:.1f}", f"{entry['nsPerDay']/stock:.2f}" if stock else "-",
+                         f"{entry['nsPerDay']/heavy:.2f}" if heavy else "-",
+                         f"{at['D']:.2f} / {at['tauRot']:.2f} / {at['tauU']:.2f}",
+                         f"{entry['samplesPerHour']:.0f} ({entry['samplesPerHour']/result['summary']['stock']['samplesPerHour']:.2f}x)"
+                         if stock else "-"])
+        document.table(["configuration", "accurate step (fit, fs)", "2-sigma rule (fs)", "timed at (fs)", "ns/day",
+                        "vs stock", "vs stock heavy-H", "D / tau_1 / tau_U at that step", "U samples per hour (vs stock)"],
+                       rows)
+        figure = plot(result, document.figurePath(f"inertia_sampling_{result['name']}.png"))
+        if figure:
+            document.figure(figure, f"{result['title']}: bias of U against step, and ns/day at the accurate step")
+    document.write()
+
+
+def plot(result, path):
+    plt = pyplot()
+    if plt is None:
+        return None
+    figure, (left, right) = plt.subplots(1, 2, figsize=(11, 4.2))
+    for label, entry in result["summary"].items():
+        if not entry["points"]:
+            continue
+        h = np.array([p["step"] for p in entry["points"]])
+        bias = np.array([p["potential"][2] for p in entry["points"]])
+        error = np.array([p["potential"][3] for p in entry["points"]])
+        line = left.errorbar(h, bias, yerr=error, marker="o", linestyle="none", label=label, capsize=3)
+        grid = np.linspace(0, h.max(), 100)
+        a, b = entry["fit"]
+        left.plot(grid, a*grid**2 + b*grid**4, color=line[0].get_color(), alpha=0.6)
+    tolerance = result["tolerance"]
+    left.axhspan(-tolerance, tolerance, color="0.9")
+    left.set_xlabel("step (fs)")
+    left.set_ylabel("U/water - reference (kJ/mol)")
+    left.legend(fontsize=8)
+    labels = [label for label, entry in result["summary"].items() if "nsPerDay" in entry]
+    right.bar(labels, [result["summary"][label]["nsPerDay"] for label in labels], color="tab:blue")
+    right.set_ylabel("ns/day at the accurate step")
+    right.tick_params(axis="x", labelrotation=20, labelsize=8)
+    figure.suptitle(result["title"])
+    figure.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    figure.savefig(path, dpi=110)
+    plt.close(figure)
+    return path
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--systems", nargs="+", default=["tip3p-nvt"], choices=WATER_SYSTEMS)
+    parser.add_argument("--floors", nargs="+", type=float, default=[0.04], help="minimum moments to try (amu nm^2)")
+    parser.add_argument("--starts", type=int, default=2)
+    parser.add_argument("--time", type=float, default=20.0, help="ps sampled per run")
+    parser.add_argument("--discard", type=float, default=2.0, help="ps discarded per run")
+    parser.add_argument("--equilibrate", type=float, default=20.0, help="ps of stock NPT equilibration")
+    parser.add_argument("--tolerance", type=float, default=0.1, help="accepted |bias| of U per water (kJ/mol)")
+    parser.add_argument("--platform", default="CPU")
+    parser.add_argument("--threads", type=int, default=0)
+    parser.add_argument("--timing-steps", type=int, default=100)
+    parser.add_argument("--timing-repetitions", type=int, default=7)
+    parser.add_argument("--quick", action="store_true", help="a smoke check: short runs, few steps, one start")
+    parser.add_argument("--report", action="store_true", help="only write the report from the saved systems")
+    args = parser.parse_args()
+    if args.quick:
+        args.starts, args.time, args.discard, args.equilibrate = 1, 2.0, 0.5, 2.0
+        args.timing_steps, args.timing_repetitions = 10, 3
+    folder = RESULTS/("quick" if args.quick else "full")
+    folder.mkdir(parents=True, exist_ok=True)
+    if not args.report:
+        openLog(folder/"log.txt")
+        platform = openmm.Platform.getPlatformByName(args.platform)
+        properties = {"Threads": str(args.threads)} if args.platform == "CPU" and args.threads else {}
+        for name in args.systems:
+            result = runSystem(name, args, platform, properties)
+            (folder/f"{name}.json").write_text(json.dumps(result, indent=1))
+    results = [json.loads(path.read_text()) for path in sorted(folder.glob("*.json"))]
+    report(results, args.quick)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
