@@ -178,7 +178,7 @@ def diffusion(oxygens, boxes):
         return float("nan")
     msd = [np.mean(np.sum((path[lag:] - path[:-lag])**2, axis=-1)) for lag in lags]
     slope = np.polyfit(lags*SAMPLE_EVERY, msd, 1)[0]    # nm^2/ps
-    return float(slope/6*1e2)                            # 1 nm^2/ps = 1e-2 cm^2/s
+    return float(slope/6*1e3)                            # 1 nm^2/ps = 1e-2 cm^2/s = 1e3 x 1e-5 cm^2/s
 
 
 def rotationalTime(axes):

@@ -136,8 +136,8 @@ public:
      * and the kinetic energy and temperature the integrator reports are those of the raised moments, so
      * that the thermostats work as before. The rotational dynamics (and, through the coupling of
      * rotation and translation in a liquid, the diffusion) is slower: time correlation functions and
-     * transport properties are not those of the real molecules. For water (TIP3P moments 0.0062,
-     * 0.0115, 0.0177 amu nm^2), 0.04 makes every water a spherical top, whose exact free rotation is
+     * transport properties are not those of the real molecules. For water (TIP3P moments 0.0061,
+     * 0.0116, 0.0177 amu nm^2), 0.04 makes every water a spherical top, whose exact free rotation is
      * also the cheapest one. Set it before the integrator is bound to a Context.
      *
      * @param moment  the minimum moment, measured in amu nm^2 (0 for none)
@@ -212,6 +212,9 @@ protected:
      * angular velocity of each body whose moments are raised scaled by sqrt(I_k / I'_k) about each of
      * its principal axes, so that its rotation is drawn from the Maxwell-Boltzmann distribution of the
      * raised moments (the projection onto rigid motion keeps the angular velocity of the particles).
+     * Where OpenMM then takes the velocities back by getVelocityTimeOffset() (F_i offset / m_i), each
+     * raised body's angular velocity is first corrected so that the torque turns it with the raised
+     * moments.
      */
     std::vector<OpenMM::Vec3> getVelocitiesForTemperature(const OpenMM::System& system, double temperature, int randomSeed) const;
     /**

@@ -172,7 +172,15 @@ vector<Vec3> RigidBodyIntegratorBase::getVelocitiesForTemperature(const System& 
     // The axes are those of the body's particles as they are now (a fit to the shape would give the
     // same ones, but the projection has not necessarily run yet); where moments are equal any axes in
     // their plane do, since they are raised alike.
-    vector<Vec3> positions;
+    // OpenMM then takes velocities with a time offset (RigidBodyLangevinIntegrator's dt/2) back by
+    // offset F_i / m_i, which turns a body's angular velocity by offset I^-1 tau, with the moments of
+    // its particles; the body's own is offset I'^-1 tau. The difference is added here.
+    const double offset = getVelocityTimeOffset();
+    vector<Vec3> positions, forces;
+    if (offset != 0.0) {
+        context->calcForcesAndEnergy(true, false, -1);
+        context->getForces(forces);
+    }
     context->getPositions(positions);
     const StepGeometry geometry = currentGeometry(*context, *topology);
     vector<Vec3> whole;
@@ -189,7 +197,7 @@ vector<Vec3> RigidBodyIntegratorBase::getVelocitiesForTemperature(const System& 
         topology->centreOfMass(b, whole.data(), centred);
         const Vector3 velocity = topology->centreOfMass(b, velocities);
         masses.resize(n);
-        Vector3 l = {0.0, 0.0, 0.0};
+        Vector3 l = {0.0, 0.0, 0.0}, torque = {0.0, 0.0, 0.0};
         for (int i = 0; i < n; i++) {
             masses[i] = topology->getMasses()[members[i]];
             const Vector3 relative = {velocities[members[i]][0] - velocity[0], velocities[members[i]][1] - velocity[1],
@@ -197,16 +205,22 @@ vector<Vec3> RigidBodyIntegratorBase::getVelocitiesForTemperature(const System& 
             const Vector3 moment = cross(centred[i], relative);
             for (int k = 0; k < 3; k++)
                 l[k] += masses[i]*moment[k];
+            if (offset != 0.0) {
+                const Vector3 turn = cross(centred[i], Vector3{forces[members[i]][0], forces[members[i]][1], forces[members[i]][2]});
+                for (int k = 0; k < 3; k++)
+                    torque[k] += turn[k];
+            }
         }
         Vector3 principal;
         Matrix3 axes;  // principal axes as columns: lab = axes body
         principalAxes(centred, masses, principal, axes);
-        const Vector3 bodyL = multiplyTransposed(axes, l);
+        const Vector3 bodyL = multiplyTransposed(axes, l), bodyTorque = multiplyTransposed(axes, torque);
         const double* mass = topology->getMassMoments(b);
+        const double* moments = topology->getMoments(b);
         Vector3 change = {0.0, 0.0, 0.0};
         for (int k = 0; k < 3; k++)
             if (mass[k] > 0.0)
-                change[k] = (bodyL[k]/mass[k])*(1.0/sqrt(scale[k]) - 1.0);
+                change[k] = (bodyL[k]/mass[k])*(1.0/sqrt(scale[k]) - 1.0) + offset*bodyTorque[k]*(1.0/mass[k] - 1.0/moments[k]);
         const Vector3 labChange = multiply(axes, change);
         for (int i = 0; i < n; i++) {
             const Vector3 extra = cross(labChange, centred[i]);

@@ -11,7 +11,8 @@ counterpart of hydrogen mass repartitioning:
   written, and the kinetic energy reported is that of the raised moments, sum L_k^2 / (2 I'_k) (a
   projection that took the particles' angular momentum as the body's would drain the rotation);
 - setVelocitiesToTemperature() draws each body's rotation from the Maxwell-Boltzmann distribution of
-  the raised moments;
+  the raised moments, and takes RigidBodyLangevinIntegrator's half-step offset with them;
+- RigidStateDataReporter's columns read the kinetic energy of the raised moments;
 - the configurational distribution does not change: dipoles in a uniform field sample <cos theta>
   = coth(x) - 1/x with and without raised moments, and a water box reads the bath temperature in
   translation and rotation with them;
@@ -25,6 +26,7 @@ import openmm
 import openmm.unit as unit
 import pytest
 
+import openmmrigid
 import systems
 from openmmrigid import RigidBodyIntegrator, RigidBodyLangevinIntegrator
 from test_langevin import BOLTZMANN, assert_water_temperatures, block_mean, small_water_box  # noqa: F401
@@ -321,3 +323,70 @@ def test_xml_keeps_the_minimum_moment():
     copy = openmm.XmlSerializer.deserialize(openmm.XmlSerializer.serialize(integrator))
     assert isinstance(copy, RigidBodyLangevinIntegrator)
     assert copy.getMinimumMomentOfInertia().value_in_unit(AMU_NM2) == 0.025
+
+
+def test_velocities_to_temperature_take_the_offset_with_the_raised_moments():
+    """RigidBodyLangevinIntegrator's velocities are half a step behind the positions, so OpenMM takes
+    a drawn set back by dt/2 of force over mass: with raised moments each body's angular velocity
+    must go back by dt/2 I'^-1 tau, not by its particles' I^-1 tau. The same draw without an offset
+    (RigidBodyIntegrator, same seed), taken back by hand with the raised moments, gives the same
+    velocities (Reference, 1e-9 relative)."""
+    cluster = systems.cluster(seed=12, grid=(3, 3, 2))
+    dt = 0.008
+    langevin = RigidBodyLangevinIntegrator(300, 1, dt, cluster.bodies)
+    plain = RigidBodyIntegrator(dt, cluster.bodies)
+    contexts = []
+    for integrator in (langevin, plain):
+        integrator.setMinimumMomentOfInertia(FLOOR)
+        context = systems.make_context(cluster.system, integrator, "Reference")
+        context.setPositions(cluster.positions)
+        context.setVelocitiesToTemperature(300, 11)
+        contexts.append(context)
+    offset = langevin.getVelocityTimeOffset().value_in_unit(unit.picosecond)
+    assert offset == pytest.approx(dt / 2)
+    positions = systems.positions_of(contexts[1])
+    drawn = systems.velocities_of(contexts[1])
+    forces = contexts[1].getState(getForces=True).getForces(asNumpy=True).value_in_unit(unit.kilojoule_per_mole / unit.nanometer)
+    expected = drawn.copy()
+    for p in cluster.free:
+        expected[p] -= offset * forces[p] / cluster.masses[p]
+    turned = 0.0
+    for body, (omega, moments, axes, velocity) in zip(cluster.bodies, body_omegas(cluster.masses, positions, drawn, cluster.bodies)):
+        m = cluster.masses[body]
+        r = positions[body] - m @ positions[body] / m.sum()
+        torque = np.sum(np.cross(r, forces[body]), axis=0)
+        velocity = velocity - offset * forces[body].sum(axis=0) / m.sum()
+        if len(body) > 1:
+            real = np.where(moments > 1e-9 * moments[-1], moments, 0.0)
+            inverse = np.where(real > 0, 1 / np.where(real > 0, raised(real, FLOOR), 1.0), 0.0)
+            omega = omega - offset * axes @ (inverse * (axes.T @ torque))
+            turned = max(turned, np.linalg.norm(offset * axes @ ((1 / np.where(real > 0, real, np.inf) - inverse) * (axes.T @ torque))))
+        expected[body] = velocity + np.cross(omega, r)
+    assert turned > 1e-3  # the particles' moments would turn some body visibly differently
+    np.testing.assert_allclose(systems.velocities_of(contexts[0]), expected, rtol=0, atol=1e-9 * np.max(np.abs(expected)))
+
+
+def test_reporter_columns_read_the_raised_moments():
+    """RigidStateDataReporter's kinetic energy and rotational columns are those of the raised
+    moments, computed here from the State (the cluster of test_reporter_columns, a CMMotionRemover)."""
+    from test_reporter_columns import clusterSimulation, readCsv
+    integrator = RigidBodyIntegrator(0.001, systems.cluster(seed=8).bodies)
+    integrator.setMinimumMomentOfInertia(FLOOR)
+    simulation, cluster = clusterSimulation(integrator)
+    output = io.StringIO()
+    simulation.reporters.append(openmmrigid.RigidStateDataReporter(output, 5, step=True, kineticEnergy=True,
+                                                                   rotationalKineticEnergy=True, translationalKineticEnergy=True))
+    expected = []
+    for _ in range(3):
+        simulation.step(5)
+        state = simulation.context.getState(getPositions=True, getVelocities=True)
+        x = state.getPositions(asNumpy=True).value_in_unit(unit.nanometer)
+        v = state.getVelocities(asNumpy=True).value_in_unit(unit.nanometer / unit.picosecond)
+        total = kinetic_energy_of_raised(cluster.masses, x, v, cluster.bodies, cluster.free, FLOOR)
+        unraised = kinetic_energy_of_raised(cluster.masses, x, v, cluster.bodies, cluster.free, 0.0)
+        expected.append((total, unraised))
+    header, rows = readCsv(output.getvalue())
+    for (step, kinetic, translational, rotational), (total, unraised) in zip(rows, expected):
+        assert kinetic == pytest.approx(total, rel=1e-6)   # the reporter prints 6 or more digits
+        assert translational + rotational == pytest.approx(total, rel=1e-6)
+        assert total > 1.2 * unraised
