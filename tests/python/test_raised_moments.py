@@ -179,15 +179,18 @@ def test_velocities_and_kinetic_energy_with_raised_moments(platform):
     assert integrator.computeSystemTemperature().value_in_unit(unit.kelvin) == pytest.approx(temperature, rel=rtol)
 
 
-def test_checkpoint_and_cmmotionremover_keep_the_raised_momenta():
-    """A checkpoint loaded into a new Context continues the trajectory (Reference: 1e-9 nm after 50
-    steps) with the same kinetic energy; with a CMMotionRemover, whose changes the step takes back into
-    the bodies' momenta from the particles, the energy of the raised moments is conserved."""
+@pytest.mark.parametrize("platform", systems.PLATFORMS)
+def test_checkpoint_and_cmmotionremover_keep_the_raised_momenta(platform):
+    """A checkpoint loaded into a new Context continues with the same kinetic energy (and, on
+    Reference, the same trajectory: 1e-9 nm after 50 steps); with a CMMotionRemover, whose changes
+    the step takes back into the bodies' momenta from the particles, the energy of the raised moments
+    is conserved (a step that rebuilt the momenta with the particles' moments would lose most of the
+    rotational energy at once)."""
     cluster = systems.cluster(seed=8, grid=(3, 3, 2), drift=(0.2, -0.1, 0.3))
     cluster.system.addForce(openmm.CMMotionRemover(1))
     integrator = RigidBodyIntegrator(0.001, cluster.bodies)
     integrator.setMinimumMomentOfInertia(FLOOR)
-    context = systems.make_context(cluster.system, integrator, "Reference")
+    context = systems.make_context(cluster.system, integrator, platform)
     context.setPositions(cluster.positions)
     context.setVelocities(cluster.velocities)
     integrator.step(20)
@@ -197,12 +200,14 @@ def test_checkpoint_and_cmmotionremover_keep_the_raised_momenta():
     last = context.getState(getEnergy=True, getPositions=True)
     copy = RigidBodyIntegrator(0.001, cluster.bodies)
     copy.setMinimumMomentOfInertia(FLOOR)
-    copyContext = systems.make_context(cluster.system, copy, "Reference")
+    copyContext = systems.make_context(cluster.system, copy, platform)
     copyContext.loadCheckpoint(checkpoint)
+    rtol = 1e-10 if platform == "Reference" else 1e-5
     assert copyContext.getState(getEnergy=True).getKineticEnergy() / unit.kilojoule_per_mole == pytest.approx(
-        first.getKineticEnergy() / unit.kilojoule_per_mole, rel=1e-10)
-    copy.step(50)
-    assert np.max(np.abs(systems.positions_of(copyContext) - last.getPositions(asNumpy=True).value_in_unit(unit.nanometer))) < 1e-9
+        first.getKineticEnergy() / unit.kilojoule_per_mole, rel=rtol)
+    if platform == "Reference":
+        copy.step(50)
+        assert np.max(np.abs(systems.positions_of(copyContext) - last.getPositions(asNumpy=True).value_in_unit(unit.nanometer))) < 1e-9
     energy = lambda s: (s.getKineticEnergy() + s.getPotentialEnergy()).value_in_unit(unit.kilojoule_per_mole)
     kinetic = first.getKineticEnergy().value_in_unit(unit.kilojoule_per_mole)
     assert abs(energy(last) - energy(first)) < 1e-3 * kinetic
