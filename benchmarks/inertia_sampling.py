@@ -48,7 +48,7 @@ import openmm
 from openmm import app, unit
 
 import openmmrigid
-from benchmarking import (RESULTS as BENCHMARK_RESULTS, Progress, ResultsDocument, blockMean, nsPerDay, openLog,
+from benchmarking import (RESULTS as BENCHMARK_RESULTS, Progress, ResultsDocument, blockMean, header, nsPerDay, openLog,
                           pyplot, say, stamp, timeInterleaved)
 from nvt_accuracy import (AMU_PER_NM3_IN_G_PER_ML, BOLTZMANN, FRICTION, SYSTEMS, TEMPERATURE, buildModel,
                           equilibrate, stockDegreesOfFreedom, withoutBarostat)
@@ -257,6 +257,7 @@ def runSystem(name, args, platform, properties):
                         f"T {run['temperature'][0]:.1f} K, D {run['D']:.2f}, tau_1 {run['tauRot']:.2f} ps, tau_U {run['tauU']:.2f} ps")
                 runs.append(run)
     result = dict(name=name, title=spec["title"], npt=spec["npt"], waters=waters.count, runs=runs,
+                  provenance=header(platform.getName(), args.threads or None),
                   configs={label: list(config) for label, config in configs.items()}, tolerance=args.tolerance)
     analyse(result)
     stamp(f"{name}: accurate steps " + ", ".join(f"{label} {entry['accurateStep']}" for label, entry in result["summary"].items())
@@ -357,13 +358,18 @@ def timing(result, system, heavy, state, configs, platform, properties, args):
         entry["timedStep"] = step
         entry["msPerStep"] = 1000*float(np.median(seconds))
         entry["nsPerDay"] = nsPerDay(step, float(np.median(seconds)))
-        near = [p for p in entry["points"] if p["step"] <= entry["accurateStep"]]
-        run = near[-1] if near else entry["points"][0]
-        entry["atStep"] = dict(step=run["step"], D=run["D"], tauRot=run["tauRot"], tauU=run["tauU"])
-        psPerHour = entry["nsPerDay"]*1000/24
-        entry["samplesPerHour"] = psPerHour/(2*run["tauU"])
-        entry["rotationsPerHour"] = psPerHour/run["tauRot"]
         say(f"  {label} at {step} fs: {entry['msPerStep']:.2f} ms/step, {entry['nsPerDay']:.1f} ns/day")
+
+
+def perWallHour(entry):
+    """D, tau_1 and tau_U of a configuration (means over its runs at steps up to the accurate step:
+    they are properties of the dynamics, which the step changes little there, and one run's estimate
+    of tau_U scatters by a factor 2), and what an hour of wall time gives: simulated ps, effective
+    samples of U (ps / 2 tau_U), rotational correlation times (ps / tau_1) and D t (1e-5 cm^2/s ps)."""
+    near = [p for p in entry["points"] if p["step"] <= entry["accurateStep"]]
+    D, tauRot, tauU = (float(np.mean([p[key] for p in near])) for key in ("D", "tauRot", "tauU"))
+    ps = entry["nsPerDay"]*1000/24
+    return dict(D=D, tauRot=tauRot, tauU=tauU, ps=ps, samples=ps/(2*tauU), rotations=ps/tauRot, diffusion=D*ps)
 
 
 # ---------------------------------------------------------------------------------------------------
@@ -373,7 +379,8 @@ def timing(result, system, heavy, state, configs, platform, properties, args):
 
 def report(results, quick):
     document = ResultsDocument("inertia_sampling", "Sampling speed with raised moments of inertia", quick=quick,
-                               about=__doc__.split("\n\n")[0].replace("\n", " "))
+                               about=__doc__.split("\n\n")[0].replace("\n", " "),
+                               provenance=results[0].get("provenance") if results else None)
     for result in results:
         document.section(result["title"])
         reference = result["reference"]["potential"]
@@ -393,23 +400,23 @@ def report(results, quick):
                 rows.append([label, f"{step:g}", "unstable: " + failure[:70], "", "", "", "", ""])
         document.table(["configuration", "step (fs)", "U/water (kJ/mol)", "bias", "T (K)", "D (1e-5 cm^2/s)", "tau_1 (ps)",
                         "tau_U (ps)"], rows)
-        stock = result["summary"]["stock"].get("nsPerDay")
-        heavy = result["summary"]["stock-heavy"].get("nsPerDay")
+        hours = {label: perWallHour(entry) for label, entry in result["summary"].items() if "nsPerDay" in entry}
+        stock, heavy = hours.get("stock"), hours.get("stock-heavy")
         rows = []
         for label, entry in result["summary"].items():
-            if "nsPerDay" not in entry:
-                rows.append([label, "-", "-", "-", "-", "-", "-", "-", "-"])
+            if label not in hours:
+                rows.append([label] + ["-"]*9)
                 continue
-            at = entry["atStep"]
+            hour = hours[label]
             rows.append([label, f"{entry['accurateStep']:g}", f"{entry['plainStep']}", f"{entry['timedStep']}",
-                         f"{entry['nsPerDay']:.1f}", f"{entry['nsPerDay']/stock:.2f}" if stock else "-",
-                         f"{entry['nsPerDay']/heavy:.2f}" if heavy else "-",
-                         f"{at['D']:.2f} / {at['tauRot']:.2f} / {at['tauU']:.2f}",
-                         f"{entry['samplesPerHour']:.0f} ({entry['samplesPerHour']/result['summary']['stock']['samplesPerHour']:.2f}x)"
-                         if stock else "-"])
-        document.table(["configuration", "accurate step (fit, fs)", "2-sigma rule (fs)", "timed at (fs)", "ns/day",
-                        "vs stock", "vs stock heavy-H", "D / tau_1 / tau_U at that step", "U samples per hour (vs stock)"],
-                       rows)
+                         f"{entry['msPerStep']:.2f}", f"{entry['nsPerDay']:.1f}",
+                         f"{entry['nsPerDay']/result['summary']['stock']['nsPerDay']:.2f}" if stock else "-",
+                         f"{entry['nsPerDay']/result['summary']['stock-heavy']['nsPerDay']:.2f}" if heavy else "-",
+                         f"{hour['D']:.2f} / {hour['tauRot']:.2f} / {hour['tauU']:.2f}",
+                         " / ".join(f"{hour[key]/stock[key]:.2f}" for key in ("samples", "diffusion", "rotations")) if stock else "-"])
+        document.table(["configuration", "accurate step (fit, fs)", "2-sigma rule (fs)", "timed at (fs)", "ms/step", "ns/day",
+                        "vs stock", "vs stock heavy-H", "D / tau_1 / tau_U (mean of runs to that step)",
+                        "per wall-hour vs stock: U samples / D t / rotations"], rows)
         figure = plot(result, document.figurePath(f"inertia_sampling_{result['name']}.png"))
         if figure:
             document.figure(figure, f"{result['title']}: bias of U against step, and ns/day at the accurate step")
