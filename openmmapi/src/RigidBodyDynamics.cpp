@@ -443,7 +443,7 @@ void RigidBodyDynamics::computeKineticEnergies(const vector<Vec3>& velocities, d
         const int n = system.getBodySize(b);
         const int* members = system.getBodyParticles(b);
         const double* scale = system.getInertiaScale(b);
-        if (scale[0] == 1.0 && scale[1] == 1.0 && scale[2] == 1.0) {
+        if (!rigidMomentsRaised(scale)) {
             for (int i = 0; i < n; i++) {
                 Vec3 relative = velocities[members[i]] - velocity;
                 rotational += 0.5*masses[members[i]]*relative.dot(relative);

@@ -188,7 +188,7 @@ vector<Vec3> RigidBodyIntegratorBase::getVelocitiesForTemperature(const System& 
     vector<double> masses;
     for (int b = 0; b < topology->getNumBodies(); b++) {
         const double* scale = topology->getInertiaScale(b);
-        if (!topology->isShapeKnown(b) || (scale[0] == 1.0 && scale[1] == 1.0 && scale[2] == 1.0))
+        if (!topology->isShapeKnown(b) || !rigidMomentsRaised(scale))
             continue;
         const int n = topology->getBodySize(b);
         const int* members = topology->getBodyParticles(b);

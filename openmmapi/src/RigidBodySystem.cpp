@@ -106,8 +106,8 @@ void RigidBodySystem::settleHandedness(int b, bool mirror) {
 }
 
 bool RigidBodySystem::hasRaisedMoments() const {
-    for (double scale : inertiaScale)
-        if (scale != 1.0)
+    for (int b = 0; b < getNumBodies(); b++)
+        if (rigidMomentsRaised(getInertiaScale(b)))
             return true;
     return false;
 }

@@ -137,6 +137,11 @@ RIGID_FUNCTION void rigidAngularVelocity(const double* moments, const double* an
         omega[k] = (moments[k] > 0.0 ? angularMomentum[k]/moments[k] : 0.0);
 }
 
+/** Whether a body's moments were raised: some ratio s_k = I'_k / I_k of its raised to its particles' moments is not 1. */
+RIGID_FUNCTION int rigidMomentsRaised(const double* scale) {
+    return scale[0] != 1.0 || scale[1] != 1.0 || scale[2] != 1.0;
+}
+
 /**
  * The angular momentum of a body whose principal moments were raised, from the angular momentum of its
  * particles. The particles' velocities about the centre of mass, v_i - V = omega x r_i, carry the
@@ -150,7 +155,7 @@ RIGID_FUNCTION void rigidAngularVelocity(const double* moments, const double* an
 RIGID_FUNCTION void rigidRaiseAngularMomentum(double a[3][3], const double* scale, double* l) {
     double body[3];
     int i;
-    if (scale[0] == 1.0 && scale[1] == 1.0 && scale[2] == 1.0)
+    if (!rigidMomentsRaised(scale))
         return;
     rigidMultiplyVector(a, l, body);
     for (i = 0; i < 3; i++)

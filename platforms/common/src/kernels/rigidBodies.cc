@@ -552,7 +552,8 @@ KERNEL void rigidKineticEnergies(int numBodies, int numFree, GLOBAL const int* R
             }
             for (k = 0; k < 3; k++)
                 com[k] /= bodyMass[j];
-            if (inertiaScale[3*j] == 1.0 && inertiaScale[3*j + 1] == 1.0 && inertiaScale[3*j + 2] == 1.0) {
+            double scale[3] = {inertiaScale[3*j], inertiaScale[3*j + 1], inertiaScale[3*j + 2]};
+            if (!rigidMomentsRaised(scale)) {
                 for (i = bodyStart[j]; i < bodyStart[j + 1]; i++) {
                     rigidReadVelocity(velm, currentIndex[bodyParticles[i]], v);
                     for (k = 0; k < 3; k++)
