@@ -225,6 +225,7 @@ protected:
     bool hasThermostatWork() const {
         return true;
     }
+    double getBathTemperature(const std::string& method) const;
     void executeStep(OpenMM::ContextImpl& context);
 private:
     Splitting splitting;

@@ -64,6 +64,12 @@ void RigidBodyIntegrator::setTemperature(double temperature) {
     setThermostat(temperature, thermostatCollisionTime);
 }
 
+double RigidBodyIntegrator::getBathTemperature(const string& method) const {
+    if (!thermostat)
+        throw OpenMMException(noThermostatMessage(method));
+    return thermostatTemperature;
+}
+
 double RigidBodyIntegrator::getThermostatWork() {
     getKernel();  // throws unless bound
     return stepState.thermostatWork;

@@ -66,13 +66,13 @@ void checkAndersenThermostat(const System& system, const vector<vector<int> >& b
 } // namespace
 
 RigidBodyIntegratorBase::RigidBodyIntegratorBase(const string& className, double stepSize) : className(className),
-        explicitBodies(false), rotationMethod(Exact), bound(false), forcesAreValid(false), needsProjection(true), loadedVelocityKick(0.0) {
+        explicitBodies(false), rotationMethod(Exact), measureShadowWork(false), measureHeat(false), bound(false), forcesAreValid(false), needsProjection(true), loadedVelocityKick(0.0) {
     setStepSize(stepSize);
     setConstraintTolerance(1e-5);
 }
 
 RigidBodyIntegratorBase::RigidBodyIntegratorBase(const string& className, double stepSize, const vector<vector<int> >& bodies) :
-        className(className), bodies(bodies), explicitBodies(true), rotationMethod(Exact), bound(false),
+        className(className), bodies(bodies), explicitBodies(true), rotationMethod(Exact), measureShadowWork(false), measureHeat(false), bound(false),
         forcesAreValid(false), needsProjection(true), loadedVelocityKick(0.0) {
     setStepSize(stepSize);
     setConstraintTolerance(1e-5);
@@ -170,6 +170,53 @@ double RigidBodyIntegratorBase::getRotationalKineticEnergy() {
     double translational, rotational;
     getKernel().computeKineticEnergies(*context, translational, rotational);
     return rotational;
+}
+
+double RigidBodyIntegratorBase::getShadowWork() const {
+    getKernel();  // throws unless bound
+    if (!measureShadowWork)
+        throw OpenMMException(className + ".getShadowWork: the shadow work is not measured; call setMeasureShadowWork(True) "
+                "before the steps");
+    return stepState.shadowWork;
+}
+
+double RigidBodyIntegratorBase::getHeat() const {
+    getKernel();  // throws unless bound
+    if (!measureHeat)
+        throw OpenMMException(className + ".getHeat: the heat is not measured; call setMeasureHeat(True) before the steps");
+    return stepState.heat;
+}
+
+namespace {
+
+/** k_B T of the bath, for the getters in kT (an OpenMMException if it is 0). */
+double thermalEnergy(double temperature, const string& className, const string& method) {
+    if (!(temperature > 0.0))
+        throw OpenMMException(className + "." + method + ": the heat bath's temperature is 0, so there is no k_B T to measure "
+                "energy in; use the getter in kJ/mol");
+    return BOLTZ*temperature;
+}
+
+} // namespace
+
+double RigidBodyIntegratorBase::getShadowWorkInKT() const {
+    double work = getShadowWork();
+    return work/thermalEnergy(getBathTemperature("getShadowWorkInKT"), className, "getShadowWorkInKT");
+}
+
+double RigidBodyIntegratorBase::getHeatInKT() const {
+    double heat = getHeat();
+    return heat/thermalEnergy(getBathTemperature("getHeatInKT"), className, "getHeatInKT");
+}
+
+void RigidBodyIntegratorBase::resetShadowWork() {
+    getKernel();  // throws unless bound
+    stepState.shadowWork = 0.0;
+}
+
+void RigidBodyIntegratorBase::resetHeat() {
+    getKernel();  // throws unless bound
+    stepState.heat = 0.0;
 }
 
 void RigidBodyIntegratorBase::initialize(ContextImpl& contextRef) {
@@ -279,8 +326,11 @@ namespace {
 
 /** The first bytes of the integrator's part of a checkpoint since version 1. */
 const char checkpointMagic[8] = {'O', 'M', 'M', 'R', 'I', 'G', 'I', 'D'};
-/** 2: RigidBodyLangevinIntegrator's velocities are half a step behind the positions (1: on-step). */
-const int32_t checkpointVersion = 2;
+/**
+ * 2: RigidBodyLangevinIntegrator's velocities are half a step behind the positions (1: on-step).
+ * 3: the shadow work and the heat follow the step state.
+ */
+const int32_t checkpointVersion = 3;
 
 } // namespace
 
@@ -297,6 +347,8 @@ void RigidBodyIntegratorBase::createCheckpoint(ostream& stream) const {
     stream.write((const char*) &stepState.randomCounter, sizeof(stepState.randomCounter));
     if (hasThermostatWork())
         stream.write((const char*) &stepState.thermostatWork, sizeof(stepState.thermostatWork));
+    stream.write((const char*) &stepState.shadowWork, sizeof(stepState.shadowWork));
+    stream.write((const char*) &stepState.heat, sizeof(stepState.heat));
 }
 
 void RigidBodyIntegratorBase::loadCheckpoint(istream& stream) {
@@ -344,6 +396,12 @@ void RigidBodyIntegratorBase::loadCheckpoint(istream& stream) {
                 throw OpenMMException(className + ": the checkpoint ends within the thermostat's state (was it written by a "
                         "RigidBodyLangevinIntegrator?)");
         }
+        if (version >= 3) {
+            stream.read((char*) &saved.shadowWork, sizeof(saved.shadowWork));
+            stream.read((char*) &saved.heat, sizeof(saved.heat));
+            if (!stream)
+                throw OpenMMException(className + ": the checkpoint ends within the integrator's shadow work and heat");
+        }
         stepState = saved;
     }
     loadedVelocityKick = getLoadedVelocityKick(version);
@@ -379,8 +437,12 @@ void RigidBodyIntegratorBase::step(int steps) {
         context->getPeriodicBoxVectors(box[0], box[1], box[2]);
         if (box[0] != forcesBox[0] || box[1] != forcesBox[1] || box[2] != forcesBox[2])
             forcesAreValid = false;
-        if (!forcesAreValid || context->getLastForceGroups() != getIntegrationForceGroups())
-            context->calcForcesAndEnergy(true, false, getIntegrationForceGroups());
+        // Shadow work needs the potential energy the step starts from: the last step's, or evaluated here.
+        if (!forcesAreValid || context->getLastForceGroups() != getIntegrationForceGroups() ||
+                (measureShadowWork && !stepState.potentialKnown)) {
+            stepState.potentialEnergy = context->calcForcesAndEnergy(true, measureShadowWork, getIntegrationForceGroups());
+            stepState.potentialKnown = measureShadowWork;
+        }
         try {
             executeStep(*context);
         }

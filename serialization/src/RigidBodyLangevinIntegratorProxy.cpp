@@ -14,8 +14,8 @@ namespace OpenMMRigid {
 
 namespace {
 
-/** The format written by serialize(). Version 1: the first. */
-const int CURRENT_VERSION = 1;
+/** The format written by serialize(). Version 1: the first; 2: measureShadowWork, measureHeat (read with defaults). */
+const int CURRENT_VERSION = 2;
 
 } // namespace
 

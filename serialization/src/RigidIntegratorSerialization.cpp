@@ -25,6 +25,8 @@ void serializeRigidIntegratorBase(const RigidBodyIntegratorBase& integrator, Ser
     // An explicit empty list of bodies (every particle free) differs from "find the bodies in the
     // System", so the flag is written on its own, not inferred from the number of bodies.
     node.setBoolProperty("explicitBodies", integrator.hasExplicitBodies());
+    node.setBoolProperty("measureShadowWork", integrator.getMeasureShadowWork());
+    node.setBoolProperty("measureHeat", integrator.getMeasureHeat());
     if (integrator.hasExplicitBodies()) {
         SerializationNode& bodies = node.createChildNode("Bodies");
         for (const vector<int>& body : integrator.getExplicitBodies()) {
@@ -56,6 +58,8 @@ void deserializeRigidIntegratorSettings(const SerializationNode& node, RigidBody
     integrator.setIntegrationForceGroups(node.getIntProperty("integrationForceGroups", integrator.getIntegrationForceGroups()));
     int method = node.getIntProperty("rotationMethod", integrator.getRotationMethod());
     integrator.setRotationMethod(static_cast<RigidBodyIntegratorBase::RotationMethod>(method));
+    integrator.setMeasureShadowWork(node.getBoolProperty("measureShadowWork", integrator.getMeasureShadowWork()));
+    integrator.setMeasureHeat(node.getBoolProperty("measureHeat", integrator.getMeasureHeat()));
 }
 
 } // namespace OpenMMRigid
