@@ -226,6 +226,7 @@ protected:
         return true;
     }
     double getBathTemperature(const std::string& method) const;
+    AccuracyCheck::Setting getAccuracySetting() const;
     void executeStep(OpenMM::ContextImpl& context);
 private:
     Splitting splitting;

@@ -5,6 +5,7 @@
 #include "openmm/Integrator.h"
 #include "openmm/Kernel.h"
 #include "openmm/Vec3.h"
+#include "internal/AccuracyCheck.h"
 #include "internal/StepSequence.h"
 #include "internal/windowsExportRigid.h"
 #include <iosfwd>
@@ -217,6 +218,39 @@ public:
     /** Set the heat back to 0 (see getHeat()). Only available once the integrator is bound to a Context. */
     void resetHeat();
     /**
+     * Set whether to check, from the run itself, that the run stays in the integrator's accurate range
+     * (on by default). The check reads the shadow work of every step (it costs what
+     * setMeasureShadowWork() costs) and, when the step is too large for the ensemble to be right (the
+     * integration error heats a Langevin run's momenta more than 4 % above the bath, or the energy
+     * error of a run without friction fluctuates more than 0.06 times the kinetic energy's or drifts
+     * more than 0.01 kT/ps per degree of freedom, in two 2 ps windows in a row), it records a message
+     * that names the step size, the figure and the remedies (getAccuracyWarning()). In Python each
+     * step() then issues it once as an openmmrigid.AccuracyWarning (a RuntimeWarning); it does not
+     * stop the run. The README ("The accuracy check") gives the limits and the measurements behind them.
+     *
+     * @param check  true to check (the default), false to take no measurement for it
+     */
+    void setAccuracyCheck(bool check) {
+        accuracyCheck = check;
+    }
+    /** Get whether the run's accuracy is checked (see setAccuracyCheck()). */
+    bool getAccuracyCheck() const {
+        return accuracyCheck;
+    }
+    /**
+     * Get the message of the accuracy check (setAccuracyCheck()) if it has found this Context's run out
+     * of its accurate range: the step size, the figure and its limit, the time, and the remedies.
+     *
+     * @return the message, or an empty string if the check has not fired
+     */
+    std::string getAccuracyWarning() const;
+#ifndef SWIG
+    /** Whether the steps measure the shadow work: for getShadowWork(), or for the accuracy check. */
+    bool measuresShadowWork() const {
+        return measureShadowWork || accuracyCheck;
+    }
+#endif
+    /**
      * Advance a simulation through time by taking a series of time steps.
      *
      * @param steps   the number of time steps to take
@@ -269,6 +303,8 @@ protected:
      * OpenMMException, naming the method, if the integrator has none.
      */
     virtual double getBathTemperature(const std::string& method) const = 0;
+    /** What the accuracy check needs to know about a step of this integrator (see internal/AccuracyCheck.h). */
+    virtual AccuracyCheck::Setting getAccuracySetting() const = 0;
     /** Whether the step state's thermostat work belongs to this integrator's checkpoints. */
     virtual bool hasThermostatWork() const {
         return false;
@@ -301,7 +337,10 @@ private:
     std::vector<std::vector<int> > bodies;
     bool explicitBodies;
     RotationMethod rotationMethod;
-    bool measureShadowWork, measureHeat;
+    bool measureShadowWork, measureHeat, accuracyCheck;
+    /** The accuracy check of this Context's run, and the shadow work it has read (all steps, not reset). */
+    AccuracyCheck accuracyMonitor;
+    double checkedWork;
     bool bound, forcesAreValid, needsProjection;
     /** The periodic box of the last force evaluation: setPeriodicBoxVectors() sends the integrator no notice. */
     OpenMM::Vec3 forcesBox[3];

@@ -66,13 +66,13 @@ void checkAndersenThermostat(const System& system, const vector<vector<int> >& b
 } // namespace
 
 RigidBodyIntegratorBase::RigidBodyIntegratorBase(const string& className, double stepSize) : className(className),
-        explicitBodies(false), rotationMethod(Exact), measureShadowWork(false), measureHeat(false), bound(false), forcesAreValid(false), needsProjection(true), loadedVelocityKick(0.0) {
+        explicitBodies(false), rotationMethod(Exact), measureShadowWork(false), measureHeat(false), accuracyCheck(true), checkedWork(0.0), bound(false), forcesAreValid(false), needsProjection(true), loadedVelocityKick(0.0) {
     setStepSize(stepSize);
     setConstraintTolerance(1e-5);
 }
 
 RigidBodyIntegratorBase::RigidBodyIntegratorBase(const string& className, double stepSize, const vector<vector<int> >& bodies) :
-        className(className), bodies(bodies), explicitBodies(true), rotationMethod(Exact), measureShadowWork(false), measureHeat(false), bound(false),
+        className(className), bodies(bodies), explicitBodies(true), rotationMethod(Exact), measureShadowWork(false), measureHeat(false), accuracyCheck(true), checkedWork(0.0), bound(false),
         forcesAreValid(false), needsProjection(true), loadedVelocityKick(0.0) {
     setStepSize(stepSize);
     setConstraintTolerance(1e-5);
@@ -209,6 +209,10 @@ double RigidBodyIntegratorBase::getHeatInKT() const {
     return heat/thermalEnergy(getBathTemperature("getHeatInKT"), className, "getHeatInKT");
 }
 
+string RigidBodyIntegratorBase::getAccuracyWarning() const {
+    return accuracyMonitor.getMessage();
+}
+
 void RigidBodyIntegratorBase::resetShadowWork() {
     getKernel();  // throws unless bound
     stepState.shadowWork = 0.0;
@@ -250,6 +254,8 @@ void RigidBodyIntegratorBase::initialize(ContextImpl& contextRef) {
     }
     stepState = StepState();
     stepState.seed = chooseRandomSeed(getRequestedSeed());
+    accuracyMonitor = AccuracyCheck();
+    checkedWork = 0.0;
     bound = true;
     forcesAreValid = false;
     needsProjection = true;
@@ -438,10 +444,10 @@ void RigidBodyIntegratorBase::step(int steps) {
         if (box[0] != forcesBox[0] || box[1] != forcesBox[1] || box[2] != forcesBox[2])
             forcesAreValid = false;
         // Shadow work needs the potential energy the step starts from: the last step's, or evaluated here.
-        if (!forcesAreValid || context->getLastForceGroups() != getIntegrationForceGroups() ||
-                (measureShadowWork && !stepState.potentialKnown)) {
-            stepState.potentialEnergy = context->calcForcesAndEnergy(true, measureShadowWork, getIntegrationForceGroups());
-            stepState.potentialKnown = measureShadowWork;
+        const bool measure = measuresShadowWork();
+        if (!forcesAreValid || context->getLastForceGroups() != getIntegrationForceGroups() || (measure && !stepState.potentialKnown)) {
+            stepState.potentialEnergy = context->calcForcesAndEnergy(true, measure, getIntegrationForceGroups());
+            stepState.potentialKnown = measure;
         }
         try {
             executeStep(*context);
@@ -452,8 +458,16 @@ void RigidBodyIntegratorBase::step(int steps) {
             stepKernel.abandonStep(*context);
             needsProjection = true;
             forcesAreValid = false;
+            accuracyMonitor.restart();
             throw;
         }
+        if (accuracyCheck) {
+            checkedWork += stepState.stepShadowWork;
+            accuracyMonitor.record(getAccuracySetting(), context->getTime(), checkedWork, stepState.stepShadowWork,
+                                   stepState.stepKinetic);
+        }
+        else
+            accuracyMonitor.restart();
         forcesAreValid = true;
         for (int k = 0; k < 3; k++)
             forcesBox[k] = box[k];

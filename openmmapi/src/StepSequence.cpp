@@ -75,7 +75,7 @@ void stepRigidBodyIntegrator(ContextImpl& context, IntegrateRigidBodyStepKernel&
     const SplittingScheme& scheme = splittingScheme(integrator.getSplitting());
     const double dt = integrator.getStepSize(), tolerance = integrator.getConstraintTolerance();
     const RigidBodyOptions::RotationMethod method = integrator.getRotationMethod();
-    const bool measureShadowWork = integrator.getMeasureShadowWork();
+    const bool measureShadowWork = integrator.measuresShadowWork();
     kernel.beginStep(context, currentGeometry(context, bodies));
     const double startEnergy = startingEnergy(context, kernel, state, measureShadowWork, integrator.getClassName());
     // kick(a_0 dt) drift(b_0 dt) ... drift(b_{s-1} dt) kick(a_s dt): the first kick uses the forces
@@ -109,8 +109,12 @@ void stepRigidBodyIntegrator(ContextImpl& context, IntegrateRigidBodyStepKernel&
     }
     else if (measureShadowWork)
         kinetic = kernel.computeKineticEnergy(context);
-    if (measureShadowWork)
-        state.shadowWork += kinetic + potential - startEnergy;
+    if (measureShadowWork) {
+        state.stepShadowWork = kinetic + potential - startEnergy;
+        state.stepKinetic = kinetic;
+        if (integrator.getMeasureShadowWork())
+            state.shadowWork += state.stepShadowWork;
+    }
     state.potentialEnergy = potential;
     state.potentialKnown = measureShadowWork;
     kernel.finishStep(context, dt);
@@ -121,7 +125,7 @@ void stepRigidBodyLangevinIntegrator(ContextImpl& context, IntegrateRigidBodySte
     const double dt = integrator.getStepSize(), tolerance = integrator.getConstraintTolerance();
     const double friction = integrator.getFriction();
     const RigidBodyOptions::RotationMethod method = integrator.getRotationMethod();
-    const bool measureShadowWork = integrator.getMeasureShadowWork(), measureHeat = integrator.getMeasureHeat();
+    const bool measureShadowWork = integrator.measuresShadowWork(), measureHeat = integrator.getMeasureHeat();
     kernel.beginStep(context, currentGeometry(context, bodies));
     const double startEnergy = startingEnergy(context, kernel, state, measureShadowWork, integrator.getClassName());
     // LFMiddle (Z. Zhang, X. Liu, K. Yan, M. E. Tuckerman and J. Liu, J. Phys. Chem. A 123, 6056
@@ -155,8 +159,12 @@ void stepRigidBodyLangevinIntegrator(ContextImpl& context, IntegrateRigidBodySte
     kernel.closingKick(context, 0.0, tolerance);
     if (measureHeat)
         state.heat += heat;
-    if (measureShadowWork)
-        state.shadowWork += kernel.computeKineticEnergy(context) + potential - startEnergy - heat;
+    if (measureShadowWork) {
+        state.stepKinetic = kernel.computeKineticEnergy(context);
+        state.stepShadowWork = state.stepKinetic + potential - startEnergy - heat;
+        if (integrator.getMeasureShadowWork())
+            state.shadowWork += state.stepShadowWork;
+    }
     state.potentialEnergy = potential;
     state.potentialKnown = measureShadowWork;
     kernel.finishStep(context, dt);

@@ -33,6 +33,8 @@ struct StepState {
      */
     double potentialEnergy = 0.0;
     bool potentialKnown = false;
+    /** The last step's shadow work and the kinetic energy after it, in kJ/mol, if it measured them (for the accuracy check). */
+    double stepShadowWork = 0.0, stepKinetic = 0.0;
 };
 
 /**
