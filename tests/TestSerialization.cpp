@@ -51,6 +51,9 @@ void checkBaseSettings(const RigidBodyIntegratorBase& copy, const RigidBodyInteg
     ASSERT_EQUAL(original.getRotationMethod(), copy.getRotationMethod());
     ASSERT_EQUAL(original.hasExplicitBodies(), copy.hasExplicitBodies());
     check(original.getExplicitBodies() == copy.getExplicitBodies(), "the explicit bodies survive the round trip");
+    ASSERT_EQUAL(original.getMeasureShadowWork(), copy.getMeasureShadowWork());
+    ASSERT_EQUAL(original.getMeasureHeat(), copy.getMeasureHeat());
+    ASSERT_EQUAL(original.getAccuracyCheck(), copy.getAccuracyCheck());
 }
 
 void checkSettings(const RigidBodyIntegrator& copy, const RigidBodyIntegrator& original) {
@@ -89,6 +92,9 @@ void testIntegratorSettings() {
             if (thermostat)
                 original.setThermostat(251.5, 0.07);
             original.setRandomNumberSeed(12345);
+            original.setMeasureShadowWork(true);
+            original.setMeasureHeat(thermostat);
+            original.setAccuracyCheck(false);
             check(original.getConstraintTolerance() != defaults.getConstraintTolerance() &&
                   original.getIntegrationForceGroups() != defaults.getIntegrationForceGroups() &&
                   original.getRandomNumberSeed() != defaults.getRandomNumberSeed(), "the settings differ from the defaults");
@@ -117,6 +123,9 @@ void testLangevinSettings() {
         original->setIntegrationForceGroups(6);
         original->setRotationMethod(RigidBodyIntegrator::NoSquish);
         original->setRandomNumberSeed(-77);
+        original->setMeasureShadowWork(explicitBodies);
+        original->setMeasureHeat(true);
+        original->setAccuracyCheck(false);
         checkSettings(*roundTrip<RigidBodyLangevinIntegrator>(*original), *original);
     }
 }
@@ -214,11 +223,11 @@ void expectXmlError(const string& text, const vector<string>& words) {
 }
 
 void testBadXml() {
-    expectXmlError("<Integrator stepSize=\".002\" type=\"RigidBodyIntegrator\" version=\"4\"/>",
-                   {"RigidBodyIntegrator", "version 4", "1 to 3"});
+    expectXmlError("<Integrator stepSize=\".002\" type=\"RigidBodyIntegrator\" version=\"5\"/>",
+                   {"RigidBodyIntegrator", "version 5", "1 to 4"});
     expectXmlError("<Integrator stepSize=\".002\" type=\"RigidBodyIntegrator\" version=\"0\"/>", {"RigidBodyIntegrator", "version 0"});
-    expectXmlError("<Integrator friction=\"1\" stepSize=\".002\" temperature=\"300\" type=\"RigidBodyLangevinIntegrator\" version=\"2\"/>",
-                   {"RigidBodyLangevinIntegrator", "version 2", "1 to 1"});
+    expectXmlError("<Integrator friction=\"1\" stepSize=\".002\" temperature=\"300\" type=\"RigidBodyLangevinIntegrator\" version=\"3\"/>",
+                   {"RigidBodyLangevinIntegrator", "version 3", "1 to 2"});
     expectXmlError("<Integrator splitting=\"9\" stepSize=\".002\" type=\"RigidBodyIntegrator\" version=\"3\"/>", {"unknown splitting 9"});
     expectXmlError("<Integrator rotationMethod=\"5\" stepSize=\".002\" type=\"RigidBodyIntegrator\" version=\"3\"/>", {"rotation method"});
     expectXmlError("<Integrator stepSize=\".002\" thermostat=\"1\" thermostatCollisionTime=\"-1\" thermostatTemperature=\"300\" "

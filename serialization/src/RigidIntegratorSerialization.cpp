@@ -27,6 +27,7 @@ void serializeRigidIntegratorBase(const RigidBodyIntegratorBase& integrator, Ser
     node.setBoolProperty("explicitBodies", integrator.hasExplicitBodies());
     node.setBoolProperty("measureShadowWork", integrator.getMeasureShadowWork());
     node.setBoolProperty("measureHeat", integrator.getMeasureHeat());
+    node.setBoolProperty("accuracyCheck", integrator.getAccuracyCheck());
     if (integrator.hasExplicitBodies()) {
         SerializationNode& bodies = node.createChildNode("Bodies");
         for (const vector<int>& body : integrator.getExplicitBodies()) {
@@ -60,6 +61,7 @@ void deserializeRigidIntegratorSettings(const SerializationNode& node, RigidBody
     integrator.setRotationMethod(static_cast<RigidBodyIntegratorBase::RotationMethod>(method));
     integrator.setMeasureShadowWork(node.getBoolProperty("measureShadowWork", integrator.getMeasureShadowWork()));
     integrator.setMeasureHeat(node.getBoolProperty("measureHeat", integrator.getMeasureHeat()));
+    integrator.setAccuracyCheck(node.getBoolProperty("accuracyCheck", integrator.getAccuracyCheck()));
 }
 
 } // namespace OpenMMRigid

@@ -34,7 +34,8 @@ def settings(integrator):
     """Every setting a copy must keep."""
     return (integrator.getStepSize(), integrator.getConstraintTolerance(), integrator.getIntegrationForceGroups(),
             integrator.getRotationMethod(), integrator.getSplitting(), integrator.hasExplicitBodies(),
-            integrator.getExplicitBodies())
+            integrator.getExplicitBodies(), integrator.getMeasureShadowWork(), integrator.getMeasureHeat(),
+            integrator.getAccuracyCheck())
 
 
 def configured(bodies):
@@ -44,6 +45,9 @@ def configured(bodies):
     integrator.setIntegrationForceGroups({0, 2, 5})
     integrator.setRotationMethod(RigidBodyIntegrator.NoSquish)
     integrator.setSplitting(RigidBodyIntegrator.Yoshida4)
+    integrator.setMeasureShadowWork(True)
+    integrator.setMeasureHeat(True)
+    integrator.setAccuracyCheck(False)
     return integrator
 
 
@@ -278,9 +282,10 @@ def test_deepcopy_keeps_python_attributes():
 
 def test_xml_format():
     xml = openmm.XmlSerializer.serialize(configured([[0, 1, 2], [3]]))
-    assert 'type="RigidBodyIntegrator"' in xml and 'version="3"' in xml
+    assert 'type="RigidBodyIntegrator"' in xml and 'version="4"' in xml
     for attribute in ("stepSize", "constraintTolerance", "integrationForceGroups", "rotationMethod", "splitting",
-                      "thermostat", "thermostatTemperature", "thermostatCollisionTime", "randomSeed", "explicitBodies"):
+                      "thermostat", "thermostatTemperature", "thermostatCollisionTime", "randomSeed", "explicitBodies",
+                      "measureShadowWork", "measureHeat", "accuracyCheck"):
         assert attribute + "=" in xml
     assert xml.count("<Body>") == 2 and xml.count("<Particle") == 4
 
@@ -297,7 +302,7 @@ def test_xml_defaults_for_older_files():
 
 
 def test_xml_errors():
-    newer = '<?xml version="1.0" ?>\n<Integrator stepSize=".004" type="RigidBodyIntegrator" version="4"/>\n'
+    newer = '<?xml version="1.0" ?>\n<Integrator stepSize=".004" type="RigidBodyIntegrator" version="5"/>\n'
     with pytest.raises(openmm.OpenMMException, match="version"):
         openmm.XmlSerializer.deserialize(newer)
     badMethod = '<?xml version="1.0" ?>\n<Integrator stepSize=".004" rotationMethod="5" type="RigidBodyIntegrator" version="1"/>\n'

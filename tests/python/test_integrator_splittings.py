@@ -335,7 +335,7 @@ def test_xml_writes_the_splitting():
     integrator = RigidBodyIntegrator(0.002)
     integrator.setSplitting(RigidBodyIntegrator.Yoshida4)
     xml = openmm.XmlSerializer.serialize(integrator)
-    assert 'version="3"' in xml and 'splitting="2"' in xml
+    assert 'version="4"' in xml and 'splitting="2"' in xml
 
 
 def test_bad_splitting_in_xml():

@@ -37,7 +37,8 @@ def settings(integrator):
     """Every setting a copy must keep."""
     return (integrator.getTemperature(), integrator.getFriction(), integrator.getRandomNumberSeed(),
             integrator.getStepSize(), integrator.getConstraintTolerance(), integrator.getIntegrationForceGroups(),
-            integrator.getRotationMethod(), integrator.hasExplicitBodies(), integrator.getExplicitBodies())
+            integrator.getRotationMethod(), integrator.hasExplicitBodies(), integrator.getExplicitBodies(),
+            integrator.getMeasureShadowWork(), integrator.getMeasureHeat(), integrator.getAccuracyCheck())
 
 
 def configured(bodies):
@@ -48,6 +49,9 @@ def configured(bodies):
     integrator.setConstraintTolerance(3e-7)
     integrator.setIntegrationForceGroups({0, 2, 5})
     integrator.setRotationMethod(RigidBodyLangevinIntegrator.NoSquish)
+    integrator.setMeasureShadowWork(True)
+    integrator.setMeasureHeat(True)
+    integrator.setAccuracyCheck(False)
     return integrator
 
 
@@ -297,16 +301,17 @@ def test_copies_keep_every_setting(choice, method):
 
 def test_xml_format_and_versions():
     xml = openmm.XmlSerializer.serialize(configured([[0, 1, 2], [3]]))
-    assert 'type="RigidBodyLangevinIntegrator"' in xml and 'version="1"' in xml
+    assert 'type="RigidBodyLangevinIntegrator"' in xml and 'version="2"' in xml
     for attribute in ("temperature", "friction", "randomSeed", "stepSize", "constraintTolerance",
-                      "integrationForceGroups", "rotationMethod", "explicitBodies"):
+                      "integrationForceGroups", "rotationMethod", "explicitBodies", "measureShadowWork", "measureHeat",
+                      "accuracyCheck"):
         assert attribute + "=" in xml
     minimal = ('<?xml version="1.0" ?>\n<Integrator temperature="250" friction="3" stepSize=".004" '
                'type="RigidBodyLangevinIntegrator" version="1"/>\n')
     integrator = openmm.XmlSerializer.deserialize(minimal)
     assert type(integrator) is RigidBodyLangevinIntegrator
     assert settings(integrator) == settings(RigidBodyLangevinIntegrator(250, 3, 0.004))
-    for bad, words in (('version="2"', "version"), ('version="1" rotationMethod="4"', "rotation method")):
+    for bad, words in (('version="3"', "version"), ('version="1" rotationMethod="4"', "rotation method")):
         text = ('<?xml version="1.0" ?>\n<Integrator temperature="250" friction="3" stepSize=".004" '
                 f'type="RigidBodyLangevinIntegrator" {bad}/>\n')
         with pytest.raises(openmm.OpenMMException, match=words):
