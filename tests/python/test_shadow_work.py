@@ -308,7 +308,7 @@ def test_checkpoint_keeps_the_sums_and_errors_name_the_class():
     for value, expected in zip((integrator.getShadowWork(), integrator.getHeat()), continued[:2]):
         assert value.value_in_unit(KJ) == pytest.approx(expected.value_in_unit(KJ), rel=1e-12)
     for a, b in zip(state_of(context), continued[2]):
-        assert np.array_equal(a, b)
+        assert np.allclose(a, b, rtol=0, atol=1e-10)  # the loaded state is fitted again: equal to rounding
     plain = RigidBodyIntegrator(0.004, [BODY])
     plain.setMeasureShadowWork(True)
     plainContext = trap_context(plain)
