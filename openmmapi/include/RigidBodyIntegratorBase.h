@@ -219,8 +219,9 @@ public:
     void resetHeat();
     /**
      * Set whether to check, from the run itself, that the run stays in the integrator's accurate range
-     * (on by default). The check reads the shadow work of every step (it costs what
-     * setMeasureShadowWork() costs) and, when the step is too large for the ensemble to be right (the
+     * (on by default). The check reads the shadow work of the steps in episodes of at least 4 ps, one
+     * at the start and one every 40 ps (while it reads, a step costs what setMeasureShadowWork()
+     * makes it cost), and, when the step is too large for the ensemble to be right (the
      * integration error heats a Langevin run's momenta more than 4 % above the bath, or the energy
      * error of a run without friction fluctuates more than 0.06 times the kinetic energy's or drifts
      * more than 0.01 kT/ps per degree of freedom, in two 2 ps windows in a row), it records a message
@@ -245,9 +246,9 @@ public:
      */
     std::string getAccuracyWarning() const;
 #ifndef SWIG
-    /** Whether the steps measure the shadow work: for getShadowWork(), or for the accuracy check. */
+    /** Whether the step being taken measures the shadow work: for getShadowWork(), or for the accuracy check. */
     bool measuresShadowWork() const {
-        return measureShadowWork || accuracyCheck;
+        return measureShadowWork || checkingStep;
     }
 #endif
     /**
@@ -337,7 +338,7 @@ private:
     std::vector<std::vector<int> > bodies;
     bool explicitBodies;
     RotationMethod rotationMethod;
-    bool measureShadowWork, measureHeat, accuracyCheck;
+    bool measureShadowWork, measureHeat, accuracyCheck, checkingStep;
     /** The accuracy check of this Context's run, and the shadow work it has read (all steps, not reset). */
     AccuracyCheck accuracyMonitor;
     double checkedWork;

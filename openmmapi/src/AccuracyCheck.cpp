@@ -12,6 +12,16 @@ void AccuracyCheck::restart() {
     started = false;
 }
 
+bool AccuracyCheck::wantsStep(const Setting& now, double time) {
+    if (!message.empty())
+        return false;
+    if (!(now == setting) || (!inEpisode && time >= nextEpisode)) {
+        inEpisode = true;
+        windowsInEpisode = 0;
+    }
+    return inEpisode;
+}
+
 void AccuracyCheck::record(const Setting& now, double time, double shadowWork, double stepWork, double kinetic) {
     lastStepWork = stepWork;
     if (!message.empty())
@@ -70,6 +80,11 @@ void AccuracyCheck::closeWindow() {
                 WindowTime << " ps before t = " << lastTime << " ps";
     }
     windowsAbove = (above ? windowsAbove + 1 : 0);
+    windowsInEpisode++;
+    if (windowsInEpisode >= 2 && windowsAbove == 0) {
+        inEpisode = false;
+        nextEpisode = lastTime + PauseTime;
+    }
     if (windowsAbove >= 2) {
         stringstream head;
         head << setting.description << " at a step of " << 1000.0*setting.stepSize << " fs";

@@ -66,13 +66,13 @@ void checkAndersenThermostat(const System& system, const vector<vector<int> >& b
 } // namespace
 
 RigidBodyIntegratorBase::RigidBodyIntegratorBase(const string& className, double stepSize) : className(className),
-        explicitBodies(false), rotationMethod(Exact), measureShadowWork(false), measureHeat(false), accuracyCheck(true), checkedWork(0.0), bound(false), forcesAreValid(false), needsProjection(true), loadedVelocityKick(0.0) {
+        explicitBodies(false), rotationMethod(Exact), measureShadowWork(false), measureHeat(false), accuracyCheck(true), checkingStep(false), checkedWork(0.0), bound(false), forcesAreValid(false), needsProjection(true), loadedVelocityKick(0.0) {
     setStepSize(stepSize);
     setConstraintTolerance(1e-5);
 }
 
 RigidBodyIntegratorBase::RigidBodyIntegratorBase(const string& className, double stepSize, const vector<vector<int> >& bodies) :
-        className(className), bodies(bodies), explicitBodies(true), rotationMethod(Exact), measureShadowWork(false), measureHeat(false), accuracyCheck(true), checkedWork(0.0), bound(false),
+        className(className), bodies(bodies), explicitBodies(true), rotationMethod(Exact), measureShadowWork(false), measureHeat(false), accuracyCheck(true), checkingStep(false), checkedWork(0.0), bound(false),
         forcesAreValid(false), needsProjection(true), loadedVelocityKick(0.0) {
     setStepSize(stepSize);
     setConstraintTolerance(1e-5);
@@ -444,6 +444,14 @@ void RigidBodyIntegratorBase::step(int steps) {
         if (box[0] != forcesBox[0] || box[1] != forcesBox[1] || box[2] != forcesBox[2])
             forcesAreValid = false;
         // Shadow work needs the potential energy the step starts from: the last step's, or evaluated here.
+        // The accuracy check measures in episodes (internal/AccuracyCheck.h).
+        AccuracyCheck::Setting setting;
+        if (accuracyCheck) {
+            setting = getAccuracySetting();
+            checkingStep = accuracyMonitor.wantsStep(setting, context->getTime());
+        }
+        else
+            checkingStep = false;
         const bool measure = measuresShadowWork();
         if (!forcesAreValid || context->getLastForceGroups() != getIntegrationForceGroups() || (measure && !stepState.potentialKnown)) {
             stepState.potentialEnergy = context->calcForcesAndEnergy(true, measure, getIntegrationForceGroups());
@@ -461,10 +469,9 @@ void RigidBodyIntegratorBase::step(int steps) {
             accuracyMonitor.restart();
             throw;
         }
-        if (accuracyCheck) {
+        if (checkingStep) {
             checkedWork += stepState.stepShadowWork;
-            accuracyMonitor.record(getAccuracySetting(), context->getTime(), checkedWork, stepState.stepShadowWork,
-                                   stepState.stepKinetic);
+            accuracyMonitor.record(setting, context->getTime(), checkedWork, stepState.stepShadowWork, stepState.stepKinetic);
         }
         else
             accuracyMonitor.restart();

@@ -28,6 +28,12 @@ namespace OpenMMRigid {
  *
  * It fires when a figure is above its limit in two windows in a row (so that one window's
  * fluctuation does not), once; the limits and their measurements: the README, "The accuracy check".
+ *
+ * It measures in episodes, so that it costs little (the shadow work needs the potential energy at
+ * every step): one from the first step of a Context, and from every change of the setting, of at
+ * least two windows, continued for as long as the last window is above a limit; then none for
+ * PauseTime ps. A run that goes wrong from its start (a step too large for it) is told within two
+ * windows; one that goes wrong later, within PauseTime.
  */
 class OPENMM_EXPORT_RIGID AccuracyCheck {
 public:
@@ -35,6 +41,8 @@ public:
     static constexpr double WindowTime = 2.0;
     /** The least number of steps in a window. */
     static constexpr int MinimumSteps = 200;
+    /** The time between episodes, in ps. */
+    static constexpr double PauseTime = 36.0;
     /** The limit of the heating of a Langevin run (fraction of the bath's temperature). */
     static constexpr double HeatingLimit = 0.04;
     /** The limit of the energy error's fluctuation against the kinetic energy's. */
@@ -57,6 +65,11 @@ public:
                    dof == other.dof && description == other.description;
         }
     };
+    /**
+     * Whether the step about to be taken, of this setting, from this time (ps), is to be measured and
+     * recorded: within an episode.
+     */
+    bool wantsStep(const Setting& setting, double time);
     /**
      * One step taken: its setting, the time after it (ps), the shadow work summed over the steps so far
      * (kJ/mol, any origin) and that of this step, and the kinetic energy after it (kJ/mol).
@@ -83,7 +96,9 @@ private:
     double startTime = 0.0, startWork = 0.0, lastStepWork = 0.0;
     // Sums over the window of t, t^2, w, w^2, t w, K, K^2, with t and w from the window's start.
     double n = 0, st = 0, stt = 0, sw = 0, sww = 0, stw = 0, sk = 0, skk = 0;
-    int windowsAbove = 0;
+    int windowsAbove = 0, windowsInEpisode = 0;
+    bool inEpisode = true;
+    double nextEpisode = 0.0;
     double lastFigure = 0.0/0.0, lastDrift = 0.0/0.0, lastTime = 0.0;
     std::string message;
 };
