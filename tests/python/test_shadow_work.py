@@ -380,3 +380,15 @@ def test_accuracy_check_off(water_state):
     integrator.setAccuracyCheck(False)
     fired, caught = run_checked(water_state, integrator, 6, chunk=3)
     assert fired is None and not caught
+
+
+def test_accuracy_check_reads_again_after_a_change_of_step(water_state):
+    """Quiet at 4 fs past its first episode; the step raised to 11 fs starts a new one, which fires."""
+    integrator = RigidBodyLangevinIntegrator(300, 1, 0.004)
+    context = water_context(water_state, integrator)
+    integrator.step(2000)  # 8 ps: the first episode (4 ps) is over
+    assert integrator.getAccuracyWarning() == ""
+    integrator.setStepSize(0.011)
+    with pytest.warns(AccuracyWarning, match="at a step of 11 fs"):
+        integrator.step(int(6.0 / 0.011))
+    del context
