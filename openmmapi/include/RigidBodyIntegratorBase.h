@@ -222,9 +222,10 @@ public:
      * (on by default). The check reads the shadow work of the steps in episodes of at least 4 ps, one
      * at the start and one every 40 ps (while it reads, a step costs what setMeasureShadowWork()
      * makes it cost), and, when the step is too large for the ensemble to be right (the
-     * integration error heats a Langevin run's momenta more than 4 % above the bath, or the energy
-     * error of a run without friction fluctuates more than 0.06 times the kinetic energy's or drifts
-     * more than 0.01 kT/ps per degree of freedom, in two 2 ps windows in a row), it records a message
+     * integration error heats a Langevin run's momenta more than 4 % above the bath, the energy of a
+     * run without friction drifts more than 0.01 kT/ps per degree of freedom, or, with the Bussi
+     * thermostat, the energy error fluctuates more than 0.06 times the kinetic energy, in two 2 ps
+     * windows in a row), it records a message
      * that names the step size, the figure and the remedies (getAccuracyWarning()). In Python each
      * step() then issues it once as an openmmrigid.AccuracyWarning (a RuntimeWarning); it does not
      * stop the run. The README ("The accuracy check") gives the limits and the measurements behind them.

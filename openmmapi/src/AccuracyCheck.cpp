@@ -74,9 +74,11 @@ void AccuracyCheck::closeWindow() {
     }
     else {
         lastFigure = (kineticVariance > 0.0 ? sqrt(residual/kineticVariance) : 0.0);
-        above = !(lastFigure <= FluctuationLimit) || !(fabs(lastDrift) <= DriftLimit);
-        text << "the energy error fluctuates " << lastFigure << " times as much as the kinetic energy (limit " << FluctuationLimit <<
-                ") and drifts " << lastDrift << " kT/ps per degree of freedom (limit " << DriftLimit << "), over the " <<
+        above = !(fabs(lastDrift) <= DriftLimit) || (setting.rescaling && !(lastFigure <= FluctuationLimit));
+        text << "the energy error fluctuates " << lastFigure << " times as much as the kinetic energy";
+        if (setting.rescaling)
+            text << " (limit " << FluctuationLimit << ")";
+        text << " and drifts " << lastDrift << " kT/ps per degree of freedom (limit " << DriftLimit << "), over the " <<
                 WindowTime << " ps before t = " << lastTime << " ps";
     }
     windowsAbove = (above ? windowsAbove + 1 : 0);

@@ -75,6 +75,7 @@ AccuracyCheck::Setting RigidBodyIntegrator::getAccuracySetting() const {
     AccuracyCheck::Setting setting;
     setting.stepSize = getStepSize();
     setting.temperature = (thermostat ? thermostatTemperature : 0.0);
+    setting.rescaling = thermostat;
     setting.dof = getTopology().getNumDegreesOfFreedom();
     setting.description = string("RigidBodyIntegrator (") + splittingScheme(splitting).name +
             (thermostat ? " with the Bussi thermostat)" : ", constant energy)");

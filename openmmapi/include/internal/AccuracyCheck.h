@@ -19,12 +19,15 @@ namespace OpenMMRigid {
  *   window, which telescopes and so is precise within picoseconds, where the kinetic temperature
  *   itself would need tens of them. It grows with the step and falls with the friction, as the error
  *   of the ensemble does.
- * - otherwise (RigidBodyIntegrator, with or without its thermostat, and friction 0): the energy
- *   error's fluctuation, the standard deviation of the shadow work about its linear trend over the
- *   window divided by that of the kinetic energy (for a Hamiltonian run, the fluctuation of the
- *   total, or Bussi's effective, energy against the kinetic energy's: the classic measure of a step
- *   size, which grows as dt^2 and is intensive), and the drift, the slope per degree of freedom in
- *   kT per ps.
+ * - otherwise (RigidBodyIntegrator, with or without its thermostat, and friction 0): the drift of
+ *   the energy, the shadow work's slope per degree of freedom in kT per ps; and with the Bussi
+ *   thermostat also the energy error's fluctuation, the standard deviation of the shadow work about
+ *   its linear trend over the window divided by that of the kinetic energy (the fluctuation of
+ *   Bussi's effective energy against the kinetic energy's: the classic measure of a step size, which
+ *   grows as dt^2 and is intensive). The thermostat holds the on-step kinetic energy at the bath's,
+ *   so an error that leaves the energy without drift still biases the ensemble (Verlet above 4 fs
+ *   in rigid water); without a thermostat the run samples its own (shadow) energy surface, and
+ *   only a drift is wrong by the README's guide for constant energy.
  *
  * It fires when a figure is above its limit in two windows in a row (so that one window's
  * fluctuation does not), once; the limits and their measurements: the README, "The accuracy check".
@@ -58,11 +61,13 @@ public:
     struct Setting {
         double stepSize = 0.0, friction = 0.0, temperature = 0.0;
         int dof = 0;
+        /** Whether a global thermostat rescales the momenta (Bussi's): the fluctuation is then judged too. */
+        bool rescaling = false;
         /** What runs (the class, and its splitting), and what to do about it (the end of the message). */
         std::string description, remedies;
         bool operator==(const Setting& other) const {
             return stepSize == other.stepSize && friction == other.friction && temperature == other.temperature &&
-                   dof == other.dof && description == other.description;
+                   dof == other.dof && rescaling == other.rescaling && description == other.description;
         }
     };
     /**
