@@ -12,6 +12,12 @@ void AccuracyCheck::restart() {
     started = false;
 }
 
+void AccuracyCheck::stateSet() {
+    started = false;
+    windowsAbove = 0;
+    skipNext = true;
+}
+
 bool AccuracyCheck::wantsStep(const Setting& now, double time) {
     if (!message.empty())
         return false;
@@ -26,6 +32,10 @@ void AccuracyCheck::record(const Setting& now, double time, double shadowWork, d
     lastStepWork = stepWork;
     if (!message.empty())
         return;  // fired once: enough
+    if (skipNext) {
+        skipNext = false;
+        return;
+    }
     const bool changed = !(now == setting);
     if (changed)
         windowsAbove = 0;  // the windows in a row must be of one setting

@@ -298,6 +298,7 @@ void RigidBodyIntegratorBase::stateChanged(State::DataType changed) {
     forcesAreValid = false;
     if ((changed != State::Positions && changed != State::Velocities) || !bound)
         return;
+    accuracyMonitor.stateSet();
     const bool wasFitted = !needsProjection;
     needsProjection = true;
     IntegrateRigidBodyStepKernel& stepKernel = getKernel();
@@ -411,6 +412,7 @@ void RigidBodyIntegratorBase::loadCheckpoint(istream& stream) {
         stepState = saved;
     }
     loadedVelocityKick = getLoadedVelocityKick(version);
+    accuracyMonitor.stateSet();
     needsProjection = true;
     forcesAreValid = false;
 }

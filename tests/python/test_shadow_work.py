@@ -392,3 +392,20 @@ def test_accuracy_check_reads_again_after_a_change_of_step(water_state):
     with pytest.warns(AccuracyWarning, match="at a step of 11 fs"):
         integrator.step(int(6.0 / 0.011))
     del context
+
+
+def test_accuracy_check_is_quiet_when_the_state_is_set_again_and_again(water_state):
+    """Canonical velocities set every 0.5 ps (as a sampling protocol does) make each first kick's
+    shadow work jump (by about (omega dt)^2 kT / 2 per degree of freedom): the check starts its
+    windows again after each and stays quiet at 8 fs."""
+    integrator = RigidBodyLangevinIntegrator(300, 1, 0.008)
+    context = water_context(water_state, integrator)
+    system = water_state[0]
+    masses = np.array([system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles())])
+    rng = np.random.default_rng(1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", AccuracyWarning)
+        for _ in range(20):
+            context.setVelocities(rng.standard_normal((len(masses), 3)) * np.sqrt(BOLTZMANN * 300 / masses)[:, None])
+            integrator.step(62)
+    assert integrator.getAccuracyWarning() == ""

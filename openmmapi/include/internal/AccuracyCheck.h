@@ -82,6 +82,13 @@ public:
     void record(const Setting& setting, double time, double shadowWork, double stepWork, double kinetic);
     /** Forget the window in progress (a step that did not finish, a new Context). */
     void restart();
+    /**
+     * The state was set from outside (positions, velocities, a checkpoint): the windows start again,
+     * after the next step, whose shadow work carries the jump from the state set to the integrator's
+     * own (velocities drawn for one time read at another: a Langevin step's first kick from
+     * canonical velocities adds about (omega dt)^2 kT / 2 per degree of freedom).
+     */
+    void stateSet();
     /** The message of the signal once it has fired; empty before. */
     const std::string& getMessage() const {
         return message;
@@ -102,7 +109,7 @@ private:
     // Sums over the window of t, t^2, w, w^2, t w, K, K^2, with t and w from the window's start.
     double n = 0, st = 0, stt = 0, sw = 0, sww = 0, stw = 0, sk = 0, skk = 0;
     int windowsAbove = 0, windowsInEpisode = 0;
-    bool inEpisode = true;
+    bool inEpisode = true, skipNext = false;
     double nextEpisode = 0.0;
     double lastFigure = 0.0/0.0, lastDrift = 0.0/0.0, lastTime = 0.0;
     std::string message;
