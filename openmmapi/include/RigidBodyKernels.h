@@ -79,7 +79,7 @@ public:
                             double constraintTolerance) = 0;
     /**
      * Within a step: write the bodies' rigid velocities, from the momenta the stages have made so
-     * far, to their particles, so that computeKineticEnergy() reads the kinetic energy now (the
+     * far, to their particles, so that computeKineticEnergies() reads the kinetic energy now (the
      * heat of an Ornstein-Uhlenbeck stage). Changes no momentum and applies no constraint.
      */
     virtual void writeBodyVelocities(OpenMM::ContextImpl& context) = 0;

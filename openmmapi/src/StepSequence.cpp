@@ -30,6 +30,18 @@ double evaluateForces(ContextImpl& context, int groups, bool energy = false) {
 }
 
 /**
+ * The kinetic energy now, from the kernel's stage that splits it (translation plus rotation): the sum
+ * the Bussi thermostat rescales. (On OpenCL it is the plugin's own reduction; OpenMM's
+ * IntegrationUtilities::computeKineticEnergy, behind computeKineticEnergy(), crashes PoCL for a
+ * System of one particle, stock VerletIntegrator's Contexts too.)
+ */
+double kineticEnergy(ContextImpl& context, IntegrateRigidBodyStepKernel& kernel) {
+    double translational, rotational;
+    kernel.computeKineticEnergies(context, translational, rotational);
+    return translational + rotational;
+}
+
+/**
  * The total energy K + U the step starts from, if shadow work is measured: the kinetic energy of the
  * Context's velocities now (a CMMotionRemover or Andersen thermostat may have changed them since the
  * last step) and the potential energy of the forces the step starts with.
@@ -41,7 +53,7 @@ double startingEnergy(ContextImpl& context, IntegrateRigidBodyStepKernel& kernel
     if (!state.potentialKnown)
         throw OpenMMException(className + ": internal error: the shadow work is measured but the potential energy at the start "
                 "of the step is unknown");
-    return kernel.computeKineticEnergy(context) + state.potentialEnergy;
+    return kineticEnergy(context, kernel) + state.potentialEnergy;
 }
 
 } // namespace
@@ -108,7 +120,7 @@ void stepRigidBodyIntegrator(ContextImpl& context, IntegrateRigidBodyStepKernel&
             state.heat += newKinetic - kinetic;
     }
     else if (measureShadowWork)
-        kinetic = kernel.computeKineticEnergy(context);
+        kinetic = kineticEnergy(context, kernel);
     if (measureShadowWork) {
         state.stepShadowWork = kinetic + potential - startEnergy;
         state.stepKinetic = kinetic;
@@ -144,12 +156,12 @@ void stepRigidBodyLangevinIntegrator(ContextImpl& context, IntegrateRigidBodySte
         const bool measure = (measureShadowWork || measureHeat);
         if (measure) {
             kernel.writeBodyVelocities(context);
-            heat = -kernel.computeKineticEnergy(context);
+            heat = -kineticEnergy(context, kernel);
         }
         kernel.thermalize(context, exp(-friction*dt), BOLTZ*integrator.getTemperature(), state.seed, state.randomCounter++, tolerance);
         if (measure) {
             kernel.writeBodyVelocities(context);
-            heat += kernel.computeKineticEnergy(context);
+            heat += kineticEnergy(context, kernel);
         }
     }
     kernel.kickAndDrift(context, 0.0, 0.5*dt, method, tolerance);
@@ -160,7 +172,7 @@ void stepRigidBodyLangevinIntegrator(ContextImpl& context, IntegrateRigidBodySte
     if (measureHeat)
         state.heat += heat;
     if (measureShadowWork) {
-        state.stepKinetic = kernel.computeKineticEnergy(context);
+        state.stepKinetic = kineticEnergy(context, kernel);
         state.stepShadowWork = state.stepKinetic + potential - startEnergy - heat;
         if (integrator.getMeasureShadowWork())
             state.shadowWork += state.stepShadowWork;

@@ -156,7 +156,7 @@ public:
     /**
      * Write every body's rigid velocities v = V + omega x (r - R), from the momenta the stages have
      * made so far, to its particles (and record them as written, so that the next stage keeps those
-     * momenta): within a step, before computeKineticEnergy() is asked for the energy of the momenta
+     * momenta): within a step, before computeKineticEnergies() is asked for the energy of the momenta
      * now (the heat of a Langevin step's Ornstein-Uhlenbeck stage). Free particles' velocities are
      * always current. Changes no momentum.
      */
