@@ -177,7 +177,9 @@ public:
      * kinetic energy only. With the heat, it makes up the whole energy change of the steps:
      * shadow work + heat = change of K + U, which is how it is computed (the energy before and after
      * each step, less the heat). What changes the state between steps (a barostat, a
-     * CMMotionRemover, setPositions) is neither. For a trajectory of an exact dynamics it would be 0;
+     * CMMotionRemover, setPositions) is neither; but velocities that a Force changes between steps
+     * into something other than rigid motion (an AndersenThermostat's redraws) are projected onto it
+     * by the next step, and the energy that removes counts in that step's shadow work. For a trajectory of an exact dynamics it would be 0;
      * its growth per step measures the integrator's error (Sivak, Chodera and Crooks, Phys. Rev. X 3,
      * 011007 (2013)). Which terms each splitting accumulates: the README, "Shadow work and heat".
      * Saved in checkpoints. Only available once the integrator is bound to a Context.
@@ -228,7 +230,9 @@ public:
      * windows in a row), it records a message
      * that names the step size, the figure and the remedies (getAccuracyWarning()). In Python each
      * step() then issues it once as an openmmrigid.AccuracyWarning (a RuntimeWarning); it does not
-     * stop the run. The README ("The accuracy check") gives the limits and the measurements behind them.
+     * stop the run. A System with an AndersenThermostat is not checked (its redraws between steps
+     * are not rigid motion, and their projection would read as an energy drift). The README ("The
+     * accuracy check") gives the limits and the measurements behind them.
      *
      * @param check  true to check (the default), false to take no measurement for it
      */
@@ -340,6 +344,8 @@ private:
     bool explicitBodies;
     RotationMethod rotationMethod;
     bool measureShadowWork, measureHeat, accuracyCheck, checkingStep;
+    /** Whether the System has an AndersenThermostat (whose runs the accuracy check leaves alone). */
+    bool andersenThermostat;
     /** The accuracy check of this Context's run, and the shadow work it has read (all steps, not reset). */
     AccuracyCheck accuracyMonitor;
     double checkedWork;
