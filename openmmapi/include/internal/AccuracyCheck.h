@@ -2,6 +2,7 @@
 #define OPENMMRIGID_ACCURACYCHECK_H_
 
 #include "internal/windowsExportRigid.h"
+#include <limits>
 #include <string>
 
 namespace OpenMMRigid {
@@ -111,7 +112,7 @@ private:
     int windowsAbove = 0, windowsInEpisode = 0;
     bool inEpisode = true, skipNext = false;
     double nextEpisode = 0.0;
-    double lastFigure = 0.0/0.0, lastDrift = 0.0/0.0, lastTime = 0.0;
+    double lastFigure = std::numeric_limits<double>::quiet_NaN(), lastDrift = std::numeric_limits<double>::quiet_NaN(), lastTime = 0.0;
     std::string message;
 };
 
