@@ -52,6 +52,9 @@ void checkBaseSettings(const RigidBodyIntegratorBase& copy, const RigidBodyInteg
     ASSERT_EQUAL(original.getMinimumMomentOfInertia(), copy.getMinimumMomentOfInertia());
     ASSERT_EQUAL(original.hasExplicitBodies(), copy.hasExplicitBodies());
     check(original.getExplicitBodies() == copy.getExplicitBodies(), "the explicit bodies survive the round trip");
+    ASSERT_EQUAL(original.getMeasureShadowWork(), copy.getMeasureShadowWork());
+    ASSERT_EQUAL(original.getMeasureHeat(), copy.getMeasureHeat());
+    ASSERT_EQUAL(original.getAccuracyCheck(), copy.getAccuracyCheck());
 }
 
 void checkSettings(const RigidBodyIntegrator& copy, const RigidBodyIntegrator& original) {
@@ -91,6 +94,9 @@ void testIntegratorSettings() {
             if (thermostat)
                 original.setThermostat(251.5, 0.07);
             original.setRandomNumberSeed(12345);
+            original.setMeasureShadowWork(true);
+            original.setMeasureHeat(thermostat);
+            original.setAccuracyCheck(false);
             check(original.getConstraintTolerance() != defaults.getConstraintTolerance() &&
                   original.getIntegrationForceGroups() != defaults.getIntegrationForceGroups() &&
                   original.getMinimumMomentOfInertia() != defaults.getMinimumMomentOfInertia() &&
@@ -121,6 +127,9 @@ void testLangevinSettings() {
         original->setRotationMethod(RigidBodyIntegrator::NoSquish);
         original->setRandomNumberSeed(-77);
         original->setMinimumMomentOfInertia(0.021);
+        original->setMeasureShadowWork(explicitBodies);
+        original->setMeasureHeat(true);
+        original->setAccuracyCheck(false);
         checkSettings(*roundTrip<RigidBodyLangevinIntegrator>(*original), *original);
     }
 }

@@ -225,6 +225,8 @@ protected:
     bool hasThermostatWork() const {
         return true;
     }
+    double getBathTemperature(const std::string& method) const;
+    AccuracyCheck::Setting getAccuracySetting() const;
     void executeStep(OpenMM::ContextImpl& context);
 private:
     Splitting splitting;

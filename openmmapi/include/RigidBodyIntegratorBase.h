@@ -5,6 +5,7 @@
 #include "openmm/Integrator.h"
 #include "openmm/Kernel.h"
 #include "openmm/Vec3.h"
+#include "internal/AccuracyCheck.h"
 #include "internal/StepSequence.h"
 #include "internal/windowsExportRigid.h"
 #include <iosfwd>
@@ -176,6 +177,125 @@ public:
      */
     double computeSystemTemperature();
     /**
+     * Set whether to measure the shadow work: the energy change of the deterministic stages of each
+     * step (kicks and drifts), summed over the steps (see getShadowWork()). Off by default: it needs
+     * the potential energy at one force evaluation per step and two kinetic energies (three for
+     * RigidBodyLangevinIntegrator), which the step otherwise does not compute. Takes effect at the
+     * next step; switching it on or off keeps the sum so far.
+     *
+     * @param measure  true to measure it
+     */
+    void setMeasureShadowWork(bool measure) {
+        measureShadowWork = measure;
+    }
+    /** Get whether the shadow work is measured (see setMeasureShadowWork()). */
+    bool getMeasureShadowWork() const {
+        return measureShadowWork;
+    }
+    /**
+     * Set whether to measure the heat: the kinetic energy that the stochastic part of each step (the
+     * Ornstein-Uhlenbeck stage of RigidBodyLangevinIntegrator, the rescaling of RigidBodyIntegrator's
+     * thermostat) adds, summed over the steps (see getHeat()). Off by default; for
+     * RigidBodyLangevinIntegrator it costs two kinetic energies per step. Takes effect at the next step.
+     *
+     * @param measure  true to measure it
+     */
+    void setMeasureHeat(bool measure) {
+        measureHeat = measure;
+    }
+    /** Get whether the heat is measured (see setMeasureHeat()). */
+    bool getMeasureHeat() const {
+        return measureHeat;
+    }
+    /**
+     * Get the shadow work: the sum, over the steps taken while it was measured since the Context was
+     * created or resetShadowWork() was called, of the change of the total energy K + U (U of the
+     * integration force groups) that the step's deterministic stages made. A free drift changes the
+     * potential energy only (the exact free rotation keeps each body's kinetic energy; NoSquish and the
+     * constraints among free particles may change it a little, which is counted), and a kick the
+     * kinetic energy only. With the heat, it makes up the whole energy change of the steps:
+     * shadow work + heat = change of K + U, which is how it is computed (the energy before and after
+     * each step, less the heat). What changes the state between steps (a barostat, a
+     * CMMotionRemover, setPositions) is neither; but velocities that a Force changes between steps
+     * into something other than rigid motion (an AndersenThermostat's redraws) are projected onto it
+     * by the next step, and the energy that removes counts in that step's shadow work. For a trajectory of an exact dynamics it would be 0;
+     * its growth per step measures the integrator's error (Sivak, Chodera and Crooks, Phys. Rev. X 3,
+     * 011007 (2013)). Which terms each splitting accumulates: the README, "Shadow work and heat".
+     * Saved in checkpoints. Only available once the integrator is bound to a Context.
+     *
+     * @return the shadow work, measured in kJ/mol
+     * @throws OpenMMException if the shadow work is not measured (setMeasureShadowWork())
+     */
+    double getShadowWork() const;
+    /**
+     * Get the heat: the sum, over the steps taken while it was measured since the Context was created
+     * or resetHeat() was called, of the kinetic energy the stochastic part of the step added (negative
+     * where it took energy away). For RigidBodyIntegrator it is the thermostat's work over those steps
+     * (0 without a thermostat). Saved in checkpoints. Only available once the integrator is bound to a
+     * Context.
+     *
+     * @return the heat, measured in kJ/mol
+     * @throws OpenMMException if the heat is not measured (setMeasureHeat())
+     */
+    double getHeat() const;
+    /**
+     * Get the shadow work (getShadowWork()) in units of k_B T, T the temperature of the heat bath now.
+     *
+     * @return the shadow work divided by k_B T (dimensionless)
+     * @throws OpenMMException if the shadow work is not measured, or the integrator has no heat bath
+     *         (a RigidBodyIntegrator without a thermostat), or its temperature is 0
+     */
+    double getShadowWorkInKT() const;
+    /**
+     * Get the heat (getHeat()) in units of k_B T, T the temperature of the heat bath now.
+     *
+     * @return the heat divided by k_B T (dimensionless)
+     * @throws OpenMMException if the heat is not measured, or the integrator has no heat bath (a
+     *         RigidBodyIntegrator without a thermostat), or its temperature is 0
+     */
+    double getHeatInKT() const;
+    /** Set the shadow work back to 0 (see getShadowWork()). Only available once the integrator is bound to a Context. */
+    void resetShadowWork();
+    /** Set the heat back to 0 (see getHeat()). Only available once the integrator is bound to a Context. */
+    void resetHeat();
+    /**
+     * Set whether to check, from the run itself, that the run stays in the integrator's accurate range
+     * (on by default). The check reads the shadow work of the steps in episodes of at least 4 ps, one
+     * at the start and one every 40 ps (while it reads, a step costs what setMeasureShadowWork()
+     * makes it cost), and, when the step is too large for the ensemble to be right (the
+     * integration error heats a Langevin run's momenta more than 4 % above the bath, the energy of a
+     * run without friction drifts more than 0.01 kT/ps per degree of freedom, or, with the Bussi
+     * thermostat, the energy error fluctuates more than 0.06 times the kinetic energy, in two 2 ps
+     * windows in a row), it records a message
+     * that names the step size, the figure and the remedies (getAccuracyWarning()). In Python each
+     * step() then issues it once as an openmmrigid.AccuracyWarning (a RuntimeWarning); it does not
+     * stop the run. A System with an AndersenThermostat is not checked (its redraws between steps
+     * are not rigid motion, and their projection would read as an energy drift). The README ("The
+     * accuracy check") gives the limits and the measurements behind them.
+     *
+     * @param check  true to check (the default), false to take no measurement for it
+     */
+    void setAccuracyCheck(bool check) {
+        accuracyCheck = check;
+    }
+    /** Get whether the run's accuracy is checked (see setAccuracyCheck()). */
+    bool getAccuracyCheck() const {
+        return accuracyCheck;
+    }
+    /**
+     * Get the message of the accuracy check (setAccuracyCheck()) if it has found this Context's run out
+     * of its accurate range: the step size, the figure and its limit, the time, and the remedies.
+     *
+     * @return the message, or an empty string if the check has not fired
+     */
+    std::string getAccuracyWarning() const;
+#ifndef SWIG
+    /** Whether the step being taken measures the shadow work: for getShadowWork(), or for the accuracy check. */
+    bool measuresShadowWork() const {
+        return measureShadowWork || checkingStep;
+    }
+#endif
+    /**
      * Advance a simulation through time by taking a series of time steps.
      *
      * @param steps   the number of time steps to take
@@ -233,6 +353,13 @@ protected:
     virtual double getLoadedVelocityKick(int version) const {
         return 0.0;
     }
+    /**
+     * The temperature of the heat bath, in K, for getShadowWorkInKT() and getHeatInKT(); an
+     * OpenMMException, naming the method, if the integrator has none.
+     */
+    virtual double getBathTemperature(const std::string& method) const = 0;
+    /** What the accuracy check needs to know about a step of this integrator (see internal/AccuracyCheck.h). */
+    virtual AccuracyCheck::Setting getAccuracySetting() const = 0;
     /** Whether the step state's thermostat work belongs to this integrator's checkpoints. */
     virtual bool hasThermostatWork() const {
         return false;
@@ -266,6 +393,12 @@ private:
     bool explicitBodies;
     RotationMethod rotationMethod;
     double minimumMoment;
+    bool measureShadowWork, measureHeat, accuracyCheck, checkingStep;
+    /** Whether the System has an AndersenThermostat (whose runs the accuracy check leaves alone). */
+    bool andersenThermostat;
+    /** The accuracy check of this Context's run, and the shadow work it has read (all steps, not reset). */
+    AccuracyCheck accuracyMonitor;
+    double checkedWork;
     bool bound, forcesAreValid, needsProjection;
     /** The periodic box of the last force evaluation: setPeriodicBoxVectors() sends the integrator no notice. */
     OpenMM::Vec3 forcesBox[3];

@@ -77,6 +77,12 @@ public:
      */
     virtual void thermalize(OpenMM::ContextImpl& context, double c, double kT, uint64_t seed, uint64_t counter,
                             double constraintTolerance) = 0;
+    /**
+     * Within a step: write the bodies' rigid velocities, from the momenta the stages have made so
+     * far, to their particles, so that computeKineticEnergies() reads the kinetic energy now (the
+     * heat of an Ornstein-Uhlenbeck stage). Changes no momentum and applies no constraint.
+     */
+    virtual void writeBodyVelocities(OpenMM::ContextImpl& context) = 0;
     /** Stage: every momentum times alpha (after a closing kick). */
     virtual void scaleMomenta(OpenMM::ContextImpl& context, double alpha) = 0;
     /**

@@ -154,6 +154,10 @@ protected:
         return randomNumberSeed;
     }
     void executeStep(OpenMM::ContextImpl& context);
+    double getBathTemperature(const std::string& method) const {
+        return temperature;
+    }
+    AccuracyCheck::Setting getAccuracySetting() const;
     /** A checkpoint from before version 2 holds on-step velocities: they go half a kick back. */
     double getLoadedVelocityKick(int version) const {
         return (version < 2 ? -getVelocityTimeOffset() : 0.0);

@@ -417,13 +417,7 @@ void RigidBodyDynamics::closingKick(vector<Vec3>& positions, vector<Vec3>& veloc
             state.velocity[k] += kick*force[k]/mass;
             state.angularMomentum[k] += kick*torque[k];
         }
-        Vector3 omega = multiplyTransposed(state.attitude, bodyAngularVelocity(b, multiply(state.attitude, state.angularMomentum)));
-        const int n = system.getBodySize(b);
-        const int* members = system.getBodyParticles(b);
-        for (int i = 0; i < n; i++) {
-            int p = members[i];
-            velocities[p] = toVec3(state.velocity) + toVec3(omega).cross(positions[p] - toVec3(state.center));
-        }
+        writeRigidVelocities(b, positions, velocities);
     });
     if (kick != 0.0)
         for (int p : system.getFreeParticles())
@@ -431,6 +425,27 @@ void RigidBodyDynamics::closingKick(vector<Vec3>& positions, vector<Vec3>& veloc
     if (constraints)
         constraints->applyToVelocities(positions, velocities, inverseMasses, constraintTolerance);
     writtenVelocities = velocities;
+}
+
+void RigidBodyDynamics::writeRigidVelocities(int b, const vector<Vec3>& positions, vector<Vec3>& velocities) {
+    const BodyState& state = states[b];
+    Vector3 omega = multiplyTransposed(state.attitude, bodyAngularVelocity(b, multiply(state.attitude, state.angularMomentum)));
+    const int n = system.getBodySize(b);
+    const int* members = system.getBodyParticles(b);
+    for (int i = 0; i < n; i++) {
+        int p = members[i];
+        velocities[p] = toVec3(state.velocity) + toVec3(omega).cross(positions[p] - toVec3(state.center));
+    }
+}
+
+void RigidBodyDynamics::writeBodyVelocities(const vector<Vec3>& positions, vector<Vec3>& velocities) {
+    forEachBody([&](int b) {
+        writeRigidVelocities(b, positions, velocities);
+        const int n = system.getBodySize(b);
+        const int* members = system.getBodyParticles(b);
+        for (int i = 0; i < n; i++)
+            writtenVelocities[members[i]] = velocities[members[i]];
+    });
 }
 
 void RigidBodyDynamics::computeKineticEnergies(const vector<Vec3>& velocities, double& translational, double& rotational) const {

@@ -1,4 +1,5 @@
 #include "RigidBodyIntegrator.h"
+#include "internal/RigidBodySystem.h"
 #include "internal/StepSequence.h"
 #include "internal/Splitting.h"
 #include "openmm/OpenMMException.h"
@@ -62,6 +63,26 @@ void RigidBodyIntegrator::setTemperature(double temperature) {
     if (!thermostat)
         throw OpenMMException(noThermostatMessage("setTemperature"));
     setThermostat(temperature, thermostatCollisionTime);
+}
+
+double RigidBodyIntegrator::getBathTemperature(const string& method) const {
+    if (!thermostat)
+        throw OpenMMException(noThermostatMessage(method));
+    return thermostatTemperature;
+}
+
+AccuracyCheck::Setting RigidBodyIntegrator::getAccuracySetting() const {
+    AccuracyCheck::Setting setting;
+    setting.stepSize = getStepSize();
+    setting.temperature = (thermostat ? thermostatTemperature : 0.0);
+    setting.rescaling = thermostat;
+    setting.dof = getTopology().getNumDegreesOfFreedom();
+    setting.description = string("RigidBodyIntegrator (") + splittingScheme(splitting).name +
+            (thermostat ? " with the Bussi thermostat)" : ", constant energy)");
+    setting.remedies = "Use a smaller step, the Omelyan2 splitting (setSplitting(RigidBodyIntegrator.Omelyan2), right for rigid "
+            "water at 6 and 8 fs where Verlet is wrong above 4 fs), or raised moments of inertia for the bodies; "
+            "setAccuracyCheck(False) turns this check off.";
+    return setting;
 }
 
 double RigidBodyIntegrator::getThermostatWork() {

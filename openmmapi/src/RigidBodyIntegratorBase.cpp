@@ -67,13 +67,13 @@ void checkAndersenThermostat(const System& system, const vector<vector<int> >& b
 } // namespace
 
 RigidBodyIntegratorBase::RigidBodyIntegratorBase(const string& className, double stepSize) : className(className),
-        explicitBodies(false), rotationMethod(Exact), minimumMoment(0.0), bound(false), forcesAreValid(false), needsProjection(true), loadedVelocityKick(0.0) {
+        explicitBodies(false), rotationMethod(Exact), minimumMoment(0.0), measureShadowWork(false), measureHeat(false), accuracyCheck(true), checkingStep(false), andersenThermostat(false), checkedWork(0.0), bound(false), forcesAreValid(false), needsProjection(true), loadedVelocityKick(0.0) {
     setStepSize(stepSize);
     setConstraintTolerance(1e-5);
 }
 
 RigidBodyIntegratorBase::RigidBodyIntegratorBase(const string& className, double stepSize, const vector<vector<int> >& bodies) :
-        className(className), bodies(bodies), explicitBodies(true), rotationMethod(Exact), minimumMoment(0.0), bound(false),
+        className(className), bodies(bodies), explicitBodies(true), rotationMethod(Exact), minimumMoment(0.0), measureShadowWork(false), measureHeat(false), accuracyCheck(true), checkingStep(false), andersenThermostat(false), checkedWork(0.0), bound(false),
         forcesAreValid(false), needsProjection(true), loadedVelocityKick(0.0) {
     setStepSize(stepSize);
     setConstraintTolerance(1e-5);
@@ -256,6 +256,57 @@ double RigidBodyIntegratorBase::getRotationalKineticEnergy() {
     return rotational;
 }
 
+double RigidBodyIntegratorBase::getShadowWork() const {
+    getKernel();  // throws unless bound
+    if (!measureShadowWork)
+        throw OpenMMException(className + ".getShadowWork: the shadow work is not measured; call setMeasureShadowWork(True) "
+                "before the steps");
+    return stepState.shadowWork;
+}
+
+double RigidBodyIntegratorBase::getHeat() const {
+    getKernel();  // throws unless bound
+    if (!measureHeat)
+        throw OpenMMException(className + ".getHeat: the heat is not measured; call setMeasureHeat(True) before the steps");
+    return stepState.heat;
+}
+
+namespace {
+
+/** k_B T of the bath, for the getters in kT (an OpenMMException if it is 0). */
+double thermalEnergy(double temperature, const string& className, const string& method) {
+    if (!(temperature > 0.0))
+        throw OpenMMException(className + "." + method + ": the heat bath's temperature is 0, so there is no k_B T to measure "
+                "energy in; use the getter in kJ/mol");
+    return BOLTZ*temperature;
+}
+
+} // namespace
+
+double RigidBodyIntegratorBase::getShadowWorkInKT() const {
+    double work = getShadowWork();
+    return work/thermalEnergy(getBathTemperature("getShadowWorkInKT"), className, "getShadowWorkInKT");
+}
+
+double RigidBodyIntegratorBase::getHeatInKT() const {
+    double heat = getHeat();
+    return heat/thermalEnergy(getBathTemperature("getHeatInKT"), className, "getHeatInKT");
+}
+
+string RigidBodyIntegratorBase::getAccuracyWarning() const {
+    return accuracyMonitor.getMessage();
+}
+
+void RigidBodyIntegratorBase::resetShadowWork() {
+    getKernel();  // throws unless bound
+    stepState.shadowWork = 0.0;
+}
+
+void RigidBodyIntegratorBase::resetHeat() {
+    getKernel();  // throws unless bound
+    stepState.heat = 0.0;
+}
+
 void RigidBodyIntegratorBase::initialize(ContextImpl& contextRef) {
     if (owner != NULL && &contextRef.getOwner() != owner)
         throw OpenMMException("This Integrator is already bound to a context");
@@ -287,6 +338,14 @@ void RigidBodyIntegratorBase::initialize(ContextImpl& contextRef) {
     }
     stepState = StepState();
     stepState.seed = chooseRandomSeed(getRequestedSeed());
+    accuracyMonitor = AccuracyCheck();
+    // An AndersenThermostat redraws particle velocities between steps, not as rigid motion: each
+    // step's projection then removes energy that is neither its error nor its heat, and the accuracy
+    // check would read that as an energy drift. Such a run is not checked.
+    andersenThermostat = false;
+    for (int f = 0; f < contextRef.getSystem().getNumForces(); f++)
+        andersenThermostat = andersenThermostat || dynamic_cast<const AndersenThermostat*>(&contextRef.getSystem().getForce(f)) != NULL;
+    checkedWork = 0.0;
     bound = true;
     forcesAreValid = false;
     needsProjection = true;
@@ -329,6 +388,7 @@ void RigidBodyIntegratorBase::stateChanged(State::DataType changed) {
     forcesAreValid = false;
     if ((changed != State::Positions && changed != State::Velocities) || !bound)
         return;
+    accuracyMonitor.stateSet();
     const bool wasFitted = !needsProjection;
     needsProjection = true;
     IntegrateRigidBodyStepKernel& stepKernel = getKernel();
@@ -363,8 +423,11 @@ namespace {
 
 /** The first bytes of the integrator's part of a checkpoint since version 1. */
 const char checkpointMagic[8] = {'O', 'M', 'M', 'R', 'I', 'G', 'I', 'D'};
-/** 2: RigidBodyLangevinIntegrator's velocities are half a step behind the positions (1: on-step). */
-const int32_t checkpointVersion = 2;
+/**
+ * 2: RigidBodyLangevinIntegrator's velocities are half a step behind the positions (1: on-step).
+ * 3: the shadow work and the heat follow the step state.
+ */
+const int32_t checkpointVersion = 3;
 
 } // namespace
 
@@ -381,6 +444,8 @@ void RigidBodyIntegratorBase::createCheckpoint(ostream& stream) const {
     stream.write((const char*) &stepState.randomCounter, sizeof(stepState.randomCounter));
     if (hasThermostatWork())
         stream.write((const char*) &stepState.thermostatWork, sizeof(stepState.thermostatWork));
+    stream.write((const char*) &stepState.shadowWork, sizeof(stepState.shadowWork));
+    stream.write((const char*) &stepState.heat, sizeof(stepState.heat));
 }
 
 void RigidBodyIntegratorBase::loadCheckpoint(istream& stream) {
@@ -428,9 +493,16 @@ void RigidBodyIntegratorBase::loadCheckpoint(istream& stream) {
                 throw OpenMMException(className + ": the checkpoint ends within the thermostat's state (was it written by a "
                         "RigidBodyLangevinIntegrator?)");
         }
+        if (version >= 3) {
+            stream.read((char*) &saved.shadowWork, sizeof(saved.shadowWork));
+            stream.read((char*) &saved.heat, sizeof(saved.heat));
+            if (!stream)
+                throw OpenMMException(className + ": the checkpoint ends within the integrator's shadow work and heat");
+        }
         stepState = saved;
     }
     loadedVelocityKick = getLoadedVelocityKick(version);
+    accuracyMonitor.stateSet();
     needsProjection = true;
     forcesAreValid = false;
 }
@@ -463,8 +535,20 @@ void RigidBodyIntegratorBase::step(int steps) {
         context->getPeriodicBoxVectors(box[0], box[1], box[2]);
         if (box[0] != forcesBox[0] || box[1] != forcesBox[1] || box[2] != forcesBox[2])
             forcesAreValid = false;
-        if (!forcesAreValid || context->getLastForceGroups() != getIntegrationForceGroups())
-            context->calcForcesAndEnergy(true, false, getIntegrationForceGroups());
+        // Shadow work needs the potential energy the step starts from: the last step's, or evaluated here.
+        // The accuracy check measures in episodes (internal/AccuracyCheck.h).
+        AccuracyCheck::Setting setting;
+        if (accuracyCheck && !andersenThermostat) {
+            setting = getAccuracySetting();
+            checkingStep = accuracyMonitor.wantsStep(setting, context->getTime());
+        }
+        else
+            checkingStep = false;
+        const bool measure = measuresShadowWork();
+        if (!forcesAreValid || context->getLastForceGroups() != getIntegrationForceGroups() || (measure && !stepState.potentialKnown)) {
+            stepState.potentialEnergy = context->calcForcesAndEnergy(true, measure, getIntegrationForceGroups());
+            stepState.potentialKnown = measure;
+        }
         try {
             executeStep(*context);
         }
@@ -474,8 +558,15 @@ void RigidBodyIntegratorBase::step(int steps) {
             stepKernel.abandonStep(*context);
             needsProjection = true;
             forcesAreValid = false;
+            accuracyMonitor.restart();
             throw;
         }
+        if (checkingStep) {
+            checkedWork += stepState.stepShadowWork;
+            accuracyMonitor.record(setting, context->getTime(), checkedWork, stepState.stepShadowWork, stepState.stepKinetic);
+        }
+        else
+            accuracyMonitor.restart();
         forcesAreValid = true;
         for (int k = 0; k < 3; k++)
             forcesBox[k] = box[k];

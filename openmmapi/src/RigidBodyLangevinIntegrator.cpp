@@ -1,4 +1,5 @@
 #include "RigidBodyLangevinIntegrator.h"
+#include "internal/RigidBodySystem.h"
 #include "internal/StepSequence.h"
 #include "openmm/OpenMMException.h"
 #include "openmm/internal/ContextImpl.h"
@@ -46,6 +47,18 @@ void RigidBodyLangevinIntegrator::setTemperature(double temp) {
 void RigidBodyLangevinIntegrator::setFriction(double coeff) {
     requireNonNegative(coeff, "friction", "1/ps");
     friction = coeff;
+}
+
+AccuracyCheck::Setting RigidBodyLangevinIntegrator::getAccuracySetting() const {
+    AccuracyCheck::Setting setting;
+    setting.stepSize = getStepSize();
+    setting.friction = friction;
+    setting.temperature = temperature;
+    setting.dof = getTopology().getNumDegreesOfFreedom();
+    setting.description = "RigidBodyLangevinIntegrator";
+    setting.remedies = "Use a smaller step (rigid water at friction 1/ps: at most 8 fs), more friction (10/ps keeps rigid "
+            "water right at 10 fs), or raised moments of inertia for the bodies; setAccuracyCheck(False) turns this check off.";
+    return setting;
 }
 
 void RigidBodyLangevinIntegrator::executeStep(ContextImpl& context) {

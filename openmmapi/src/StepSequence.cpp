@@ -6,10 +6,12 @@
 #include "numerics/Philox.h"
 #include "numerics/StochasticRescaling.h"
 #include "openmm/Context.h"
+#include "openmm/OpenMMException.h"
 #include "openmm/reference/SimTKOpenMMRealType.h"
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <string>
 
 using namespace OpenMM;
 using namespace std;
@@ -18,10 +20,40 @@ namespace OpenMMRigid {
 
 namespace {
 
-/** The force evaluation after a drift: the virtual sites follow their parents, then the integration force groups. */
-void evaluateForces(ContextImpl& context, int groups) {
+/**
+ * The force evaluation after a drift: the virtual sites follow their parents, then the integration
+ * force groups. Returns their potential energy if asked for (else 0).
+ */
+double evaluateForces(ContextImpl& context, int groups, bool energy = false) {
     context.computeVirtualSites();
-    context.calcForcesAndEnergy(true, false, groups);
+    return context.calcForcesAndEnergy(true, energy, groups);
+}
+
+/**
+ * The kinetic energy now, from the kernel's stage that splits it (translation plus rotation): the sum
+ * the Bussi thermostat rescales. (On OpenCL it is the plugin's own reduction; OpenMM's
+ * IntegrationUtilities::computeKineticEnergy, behind computeKineticEnergy(), crashes PoCL for a
+ * System of one particle, stock VerletIntegrator's Contexts too.)
+ */
+double kineticEnergy(ContextImpl& context, IntegrateRigidBodyStepKernel& kernel) {
+    double translational, rotational;
+    kernel.computeKineticEnergies(context, translational, rotational);
+    return translational + rotational;
+}
+
+/**
+ * The total energy K + U the step starts from, if shadow work is measured: the kinetic energy of the
+ * Context's velocities now (a CMMotionRemover or Andersen thermostat may have changed them since the
+ * last step) and the potential energy of the forces the step starts with.
+ */
+double startingEnergy(ContextImpl& context, IntegrateRigidBodyStepKernel& kernel, const StepState& state, bool measure,
+                      const string& className) {
+    if (!measure)
+        return 0.0;
+    if (!state.potentialKnown)
+        throw OpenMMException(className + ": internal error: the shadow work is measured but the potential energy at the start "
+                "of the step is unknown");
+    return kineticEnergy(context, kernel) + state.potentialEnergy;
 }
 
 } // namespace
@@ -55,29 +87,48 @@ void stepRigidBodyIntegrator(ContextImpl& context, IntegrateRigidBodyStepKernel&
     const SplittingScheme& scheme = splittingScheme(integrator.getSplitting());
     const double dt = integrator.getStepSize(), tolerance = integrator.getConstraintTolerance();
     const RigidBodyOptions::RotationMethod method = integrator.getRotationMethod();
+    const bool measureShadowWork = integrator.measuresShadowWork();
     kernel.beginStep(context, currentGeometry(context, bodies));
+    const double startEnergy = startingEnergy(context, kernel, state, measureShadowWork, integrator.getClassName());
     // kick(a_0 dt) drift(b_0 dt) ... drift(b_{s-1} dt) kick(a_s dt): the first kick uses the forces
-    // the Context holds, and every drift is followed by a force evaluation.
+    // the Context holds, and every drift is followed by a force evaluation. Only the last one needs
+    // the energy for the shadow work: the kicks and drifts in between telescope.
+    double potential = 0.0;
     for (int stage = 0; stage < scheme.numDrifts; stage++) {
         kernel.kickAndDrift(context, scheme.kicks[stage]*dt, scheme.drifts[stage]*dt, method, tolerance);
-        if (stage == scheme.numDrifts - 1)
+        const bool last = (stage == scheme.numDrifts - 1);
+        if (last)
             kernel.beforeLastForces(context);
-        evaluateForces(context, integrator.getIntegrationForceGroups());
+        potential = evaluateForces(context, integrator.getIntegrationForceGroups(), last && measureShadowWork);
     }
     kernel.closingKick(context, scheme.kicks[scheme.numDrifts]*dt, tolerance);
+    double kinetic = 0.0;
     if (integrator.hasThermostat()) {
         // Bussi, Donadio and Parrinello, J. Chem. Phys. 126, 014101 (2007), eq. (A7): one global
         // factor for every momentum, from the exact solution over this step of the stochastic
         // equation for the kinetic energy.
         double translational, rotational, newKinetic;
         kernel.computeKineticEnergies(context, translational, rotational);
+        kinetic = translational + rotational;
         const int dof = bodies.getNumDegreesOfFreedom();
         NormalStream random(state.seed, 0, state.randomCounter++);
-        double alpha = stochasticRescalingFactor(translational + rotational, 0.5*dof*BOLTZ*integrator.getThermostatTemperature(),
+        double alpha = stochasticRescalingFactor(kinetic, 0.5*dof*BOLTZ*integrator.getThermostatTemperature(),
                                                  dof, exp(-dt/integrator.getThermostatCollisionTime()), random, newKinetic);
         kernel.scaleMomenta(context, alpha);
-        state.thermostatWork += newKinetic - (translational + rotational);
+        state.thermostatWork += newKinetic - kinetic;
+        if (integrator.getMeasureHeat())
+            state.heat += newKinetic - kinetic;
     }
+    else if (measureShadowWork)
+        kinetic = kineticEnergy(context, kernel);
+    if (measureShadowWork) {
+        state.stepShadowWork = kinetic + potential - startEnergy;
+        state.stepKinetic = kinetic;
+        if (integrator.getMeasureShadowWork())
+            state.shadowWork += state.stepShadowWork;
+    }
+    state.potentialEnergy = potential;
+    state.potentialKnown = measureShadowWork;
     kernel.finishStep(context, dt);
 }
 
@@ -86,7 +137,9 @@ void stepRigidBodyLangevinIntegrator(ContextImpl& context, IntegrateRigidBodySte
     const double dt = integrator.getStepSize(), tolerance = integrator.getConstraintTolerance();
     const double friction = integrator.getFriction();
     const RigidBodyOptions::RotationMethod method = integrator.getRotationMethod();
+    const bool measureShadowWork = integrator.measuresShadowWork(), measureHeat = integrator.getMeasureHeat();
     kernel.beginStep(context, currentGeometry(context, bodies));
+    const double startEnergy = startingEnergy(context, kernel, state, measureShadowWork, integrator.getClassName());
     // LFMiddle (Z. Zhang, X. Liu, K. Yan, M. E. Tuckerman and J. Liu, J. Phys. Chem. A 123, 6056
     // (2019)), as LangevinMiddleIntegrator: B(dt) A(dt/2) O A(dt/2), force. It is BAOAB (Leimkuhler
     // and Matthews, Appl. Math. Res. Express 2013, 34) with the closing half kick of one step joined
@@ -96,13 +149,36 @@ void stepRigidBodyLangevinIntegrator(ContextImpl& context, IntegrateRigidBodySte
     // velocities read stiff modes (the librations of water) cold. With no friction O is the
     // identity and is left out: the step is then leapfrog Verlet with exact drifts.
     kernel.kickAndDrift(context, dt, 0.5*dt, method, tolerance);
-    if (friction > 0.0)
+    double heat = 0.0;
+    if (friction > 0.0) {
+        // The heat is the kinetic energy the O stage adds: read on either side of it, with the
+        // bodies' momenta written to their particles first (which changes no momentum).
+        const bool measure = (measureShadowWork || measureHeat);
+        if (measure) {
+            kernel.writeBodyVelocities(context);
+            heat = -kineticEnergy(context, kernel);
+        }
         kernel.thermalize(context, exp(-friction*dt), BOLTZ*integrator.getTemperature(), state.seed, state.randomCounter++, tolerance);
+        if (measure) {
+            kernel.writeBodyVelocities(context);
+            heat += kineticEnergy(context, kernel);
+        }
+    }
     kernel.kickAndDrift(context, 0.0, 0.5*dt, method, tolerance);
     kernel.beforeLastForces(context);
-    evaluateForces(context, integrator.getIntegrationForceGroups());
+    const double potential = evaluateForces(context, integrator.getIntegrationForceGroups(), measureShadowWork);
     // No kick: the rigid velocities written to the body particles, the constraints among free particles applied to velocities.
     kernel.closingKick(context, 0.0, tolerance);
+    if (measureHeat)
+        state.heat += heat;
+    if (measureShadowWork) {
+        state.stepKinetic = kineticEnergy(context, kernel);
+        state.stepShadowWork = state.stepKinetic + potential - startEnergy - heat;
+        if (integrator.getMeasureShadowWork())
+            state.shadowWork += state.stepShadowWork;
+    }
+    state.potentialEnergy = potential;
+    state.potentialKnown = measureShadowWork;
     kernel.finishStep(context, dt);
 }
 

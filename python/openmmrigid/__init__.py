@@ -43,7 +43,7 @@ from importlib.metadata import PackageNotFoundError, version as _distributionVer
 
 from . import special, testing
 from .freerotor import FreeRotor
-from .integrator import (NoThermostatError, RigidBodyIntegrator, RigidBodyIntegratorBase, RigidBodyLangevinIntegrator,
+from .integrator import (AccuracyWarning, NoThermostatError, RigidBodyIntegrator, RigidBodyIntegratorBase, RigidBodyLangevinIntegrator,
                          deserializeIntegrator, getSupportedPlatforms, pluginLoadFailures)
 from .intrabody import removeIntraBodyInteractions
 from .reporters import RigidStateDataReporter
@@ -54,5 +54,5 @@ try:
 except PackageNotFoundError:  # imported from a source tree that was never installed
     __version__ = "unknown"
 
-__all__ = ["getSupportedPlatforms", "pluginLoadFailures", "NoThermostatError", "RigidBodyIntegrator", "RigidBodyLangevinIntegrator", "RigidBodyIntegratorBase", "RigidStateDataReporter", "deserializeIntegrator", "FreeRotor", "special", "testing",
+__all__ = ["getSupportedPlatforms", "pluginLoadFailures", "NoThermostatError", "AccuracyWarning", "RigidBodyIntegrator", "RigidBodyLangevinIntegrator", "RigidBodyIntegratorBase", "RigidStateDataReporter", "deserializeIntegrator", "FreeRotor", "special", "testing",
            "rigidBodiesFromTopology", "removeIntraBodyInteractions", "__version__"]

@@ -49,6 +49,8 @@ QUANTITY_RESULTS = {
     ("RigidBodyIntegratorBase", "getTranslationalKineticEnergy"): unit.kilojoule_per_mole,
     ("RigidBodyIntegratorBase", "getRotationalKineticEnergy"): unit.kilojoule_per_mole,
     ("RigidBodyIntegratorBase", "computeSystemTemperature"): unit.kelvin,
+    ("RigidBodyIntegratorBase", "getShadowWork"): unit.kilojoule_per_mole,
+    ("RigidBodyIntegratorBase", "getHeat"): unit.kilojoule_per_mole,
     ("RigidBodyIntegrator", "getThermostatTemperature"): unit.kelvin,
     ("RigidBodyIntegrator", "getTemperature"): unit.kelvin,
     ("RigidBodyIntegrator", "getThermostatCollisionTime"): unit.picosecond,

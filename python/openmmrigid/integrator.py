@@ -33,6 +33,7 @@ The serialization proxies themselves are registered by libOpenMMRigid when it lo
 import functools
 import os
 import sys
+import warnings
 
 import openmm
 
@@ -40,7 +41,7 @@ from . import _pythonapi
 from . import openmmrigid as _swig
 
 __all__ = ["RigidBodyIntegrator", "RigidBodyLangevinIntegrator", "RigidBodyIntegratorBase", "deserializeIntegrator",
-           "getSupportedPlatforms", "pluginLoadFailures", "NoThermostatError"]
+           "getSupportedPlatforms", "pluginLoadFailures", "NoThermostatError", "AccuracyWarning"]
 
 RigidBodyIntegratorBase = _swig.RigidBodyIntegratorBase
 RigidBodyIntegrator = _swig.RigidBodyIntegrator
@@ -77,6 +78,31 @@ def _raisingNoThermostatError(method):
 
 for _name in ("getTemperature", "setTemperature"):
     setattr(RigidBodyIntegrator, _name, _raisingNoThermostatError(getattr(RigidBodyIntegrator, _name)))
+
+
+class AccuracyWarning(RuntimeWarning):
+    """Issued once per Context by ``step()`` when the integrator's accuracy check
+    (``setAccuracyCheck()``) finds that the run has left its accurate range: the message names the
+    step size, the figure against its limit, and the remedies. A warning, not an error: the run goes
+    on, biased (``warnings.simplefilter("error", AccuracyWarning)`` makes it stop)."""
+
+
+def _warningOfAccuracy(method):
+    """step(), then the accuracy check's message, if it has one, issued once as an AccuracyWarning."""
+    def wrapper(self, *args, **kwargs):
+        result = method(self, *args, **kwargs)
+        message = self.getAccuracyWarning()
+        if message and getattr(self, "_accuracyWarningIssued", None) != message:
+            self._accuracyWarningIssued = message
+            warnings.warn(message, AccuracyWarning, stacklevel=2)
+        return result
+    functools.update_wrapper(wrapper, method)
+    wrapper.__wrapped__ = getattr(method, "__wrapped__", method)
+    return wrapper
+
+
+for _class in (RigidBodyIntegrator, RigidBodyLangevinIntegrator):
+    _class.step = _warningOfAccuracy(_class.step)
 
 _KERNEL_NAME = "IntegrateRigidBodyStep"
 

@@ -13,7 +13,11 @@ _COLUMNS = (
     ("rotationalKineticEnergy", "Rotational Kinetic Energy (kJ/mole)"),
     ("translationalTemperature", "Translational Temperature (K)"),
     ("rotationalTemperature", "Rotational Temperature (K)"),
+    ("shadowWork", "Shadow Work (kJ/mole)"),
+    ("heat", "Heat (kJ/mole)"),
 )
+# The columns that need the integrator to measure them: keyword -> the switch.
+_MEASURED = {"shadowWork": "setMeasureShadowWork", "heat": "setMeasureHeat"}
 # The stock columns that come before the extra ones (those after them: volume, density, speed, ...).
 _STOCK_COLUMNS_BEFORE = ("_progress", "_step", "_time", "_potentialEnergy", "_kineticEnergy", "_totalEnergy",
                          "_temperature")
@@ -36,7 +40,7 @@ class RigidStateDataReporter(app.StateDataReporter):
     the count from ``integrator.getNumDegreesOfFreedom()`` instead, so that the temperature column is
     2 KE / (dof k_B) with KE the kinetic energy in kJ/mol and dof as the integrator moves the system.
 
-    It takes the arguments of ``openmm.app.StateDataReporter`` (see that class) and four more, all
+    It takes the arguments of ``openmm.app.StateDataReporter`` (see that class) and six more, all
     False by default, each adding a column after the stock energy and temperature columns (before
     volume, density, speed and times), in this order:
 
@@ -53,9 +57,15 @@ class RigidStateDataReporter(app.StateDataReporter):
     rotationalTemperature : bool
         2 KE_rot / (dof_rot R) (K), with dof_rot 0 per single-particle body, 2 per linear body and 3
         per other body (``getBodyKind``). "nan" when there are no rotational degrees of freedom.
+    shadowWork : bool
+        ``integrator.getShadowWork()``: the energy change of the steps' deterministic stages, summed
+        (kJ/mole); the integrator must measure it (``setMeasureShadowWork(True)`` before the steps).
+    heat : bool
+        ``integrator.getHeat()``: the kinetic energy the steps' stochastic stages added, summed
+        (kJ/mole); the integrator must measure it (``setMeasureHeat(True)`` before the steps).
 
     The two temperatures add up, weighted by their degrees of freedom, to the temperature column.
-    These four columns need a ``RigidBodyIntegrator`` or ``RigidBodyLangevinIntegrator``; the
+    These six columns need a ``RigidBodyIntegrator`` or ``RigidBodyLangevinIntegrator``; the
     degrees of freedom are counted at the first report (the bodies are fixed once the Context
     exists). With any other integrator, and without them, the reporter behaves exactly like
     ``openmm.app.StateDataReporter``.
@@ -63,8 +73,9 @@ class RigidStateDataReporter(app.StateDataReporter):
     Raises
     ------
     ValueError
-        At the first report, if one of the four columns is requested and the Simulation's
-        integrator is not a rigid-body integrator.
+        At the first report, if one of the six columns is requested and the Simulation's
+        integrator is not a rigid-body integrator, or the shadow work or heat is requested and the
+        integrator does not measure it.
 
     Notes
     -----
@@ -82,11 +93,11 @@ class RigidStateDataReporter(app.StateDataReporter):
     """
 
     def __init__(self, file, reportInterval, translationalKineticEnergy=False, rotationalKineticEnergy=False,
-                 translationalTemperature=False, rotationalTemperature=False, **kwargs):
+                 translationalTemperature=False, rotationalTemperature=False, shadowWork=False, heat=False, **kwargs):
         super().__init__(file, reportInterval, **kwargs)
         self._rigidColumns = [(keyword, header) for (keyword, header), wanted in zip(
             _COLUMNS, (translationalKineticEnergy, rotationalKineticEnergy, translationalTemperature,
-                       rotationalTemperature)) if wanted]
+                       rotationalTemperature, shadowWork, heat)) if wanted]
 
     def _initializeConstants(self, simulation):
         super()._initializeConstants(simulation)
@@ -99,6 +110,10 @@ class RigidStateDataReporter(app.StateDataReporter):
                 raise ValueError(f"RigidStateDataReporter: the columns {', '.join(k for k, _ in self._rigidColumns)} "
                                  f"need a RigidBodyIntegrator or RigidBodyLangevinIntegrator; the simulation's "
                                  f"integrator is a {type(integrator).__name__}")
+            for keyword, _ in self._rigidColumns:
+                if keyword in _MEASURED and not getattr(integrator, "getM" + _MEASURED[keyword][4:])():
+                    raise ValueError(f"RigidStateDataReporter: the column {keyword} needs the integrator to measure it; "
+                                     f"call integrator.{_MEASURED[keyword]}(True) before the steps")
             self._rotationalDof = _rotationalDegreesOfFreedom(integrator)
             self._translationalDof = integrator.getNumDegreesOfFreedom() - self._rotationalDof
 
@@ -126,5 +141,9 @@ class RigidStateDataReporter(app.StateDataReporter):
         computed = {"translationalKineticEnergy": translational, "rotationalKineticEnergy": rotational,
                     "translationalTemperature": temperature(translational, self._translationalDof),
                     "rotationalTemperature": temperature(rotational, self._rotationalDof)}
+        if "shadowWork" in dict(self._rigidColumns):
+            computed["shadowWork"] = integrator.getShadowWork().value_in_unit(kilojoules)
+        if "heat" in dict(self._rigidColumns):
+            computed["heat"] = integrator.getHeat().value_in_unit(kilojoules)
         at = self._insertionIndex()
         return values[:at] + [computed[keyword] for keyword, _ in self._rigidColumns] + values[at:]

@@ -17,7 +17,7 @@ namespace {
 /**
  * The format written by serialize(). Version 1: the first. Version 2: adds the splitting. Version 3:
  * adds the thermostat (thermostat, thermostatTemperature, thermostatCollisionTime) and randomSeed.
- * Version 4: adds minimumMomentOfInertia.
+ * Version 4: adds minimumMomentOfInertia, measureShadowWork, measureHeat, accuracyCheck (read with defaults).
  */
 const int CURRENT_VERSION = 4;
 

@@ -14,7 +14,7 @@ namespace OpenMMRigid {
 
 namespace {
 
-/** The format written by serialize(). Version 1: the first. Version 2: adds minimumMomentOfInertia. */
+/** The format written by serialize(). Version 1: the first; 2: minimumMomentOfInertia, measureShadowWork, measureHeat, accuracyCheck (read with defaults). */
 const int CURRENT_VERSION = 2;
 
 } // namespace

@@ -26,6 +26,9 @@ void serializeRigidIntegratorBase(const RigidBodyIntegratorBase& integrator, Ser
     // An explicit empty list of bodies (every particle free) differs from "find the bodies in the
     // System", so the flag is written on its own, not inferred from the number of bodies.
     node.setBoolProperty("explicitBodies", integrator.hasExplicitBodies());
+    node.setBoolProperty("measureShadowWork", integrator.getMeasureShadowWork());
+    node.setBoolProperty("measureHeat", integrator.getMeasureHeat());
+    node.setBoolProperty("accuracyCheck", integrator.getAccuracyCheck());
     if (integrator.hasExplicitBodies()) {
         SerializationNode& bodies = node.createChildNode("Bodies");
         for (const vector<int>& body : integrator.getExplicitBodies()) {
@@ -59,6 +62,9 @@ void deserializeRigidIntegratorSettings(const SerializationNode& node, RigidBody
     integrator.setRotationMethod(static_cast<RigidBodyIntegratorBase::RotationMethod>(method));
     // Files written before the moments could be raised have none raised.
     integrator.setMinimumMomentOfInertia(node.getDoubleProperty("minimumMomentOfInertia", 0.0));
+    integrator.setMeasureShadowWork(node.getBoolProperty("measureShadowWork", integrator.getMeasureShadowWork()));
+    integrator.setMeasureHeat(node.getBoolProperty("measureHeat", integrator.getMeasureHeat()));
+    integrator.setAccuracyCheck(node.getBoolProperty("accuracyCheck", integrator.getAccuracyCheck()));
 }
 
 } // namespace OpenMMRigid

@@ -272,6 +272,8 @@ def test_quantity_results_are_quantities():
         integrator = cls(0.001, [[0, 1, 2]]) if cls is RigidBodyIntegrator else cls(300, 1, 0.001, [[0, 1, 2]])
         if cls is RigidBodyIntegrator:
             integrator.setThermostat(300, 0.1)  # getTemperature() is the thermostat's
+        integrator.setMeasureShadowWork(True)  # getShadowWork() and getHeat() need them measured
+        integrator.setMeasureHeat(True)
         context = openmm.Context(system, integrator, openmm.Platform.getPlatformByName("Reference"))
         context.setPositions(positions)
         context.setVelocitiesToTemperature(300, 1)

@@ -34,7 +34,8 @@ def settings(integrator):
     """Every setting a copy must keep."""
     return (integrator.getStepSize(), integrator.getConstraintTolerance(), integrator.getIntegrationForceGroups(),
             integrator.getRotationMethod(), integrator.getMinimumMomentOfInertia(), integrator.getSplitting(), integrator.hasExplicitBodies(),
-            integrator.getExplicitBodies())
+            integrator.getExplicitBodies(), integrator.getMeasureShadowWork(), integrator.getMeasureHeat(),
+            integrator.getAccuracyCheck())
 
 
 def configured(bodies):
@@ -45,6 +46,9 @@ def configured(bodies):
     integrator.setRotationMethod(RigidBodyIntegrator.NoSquish)
     integrator.setMinimumMomentOfInertia(0.0125)
     integrator.setSplitting(RigidBodyIntegrator.Yoshida4)
+    integrator.setMeasureShadowWork(True)
+    integrator.setMeasureHeat(True)
+    integrator.setAccuracyCheck(False)
     return integrator
 
 
@@ -281,7 +285,8 @@ def test_xml_format():
     xml = openmm.XmlSerializer.serialize(configured([[0, 1, 2], [3]]))
     assert 'type="RigidBodyIntegrator"' in xml and 'version="4"' in xml
     for attribute in ("stepSize", "constraintTolerance", "integrationForceGroups", "rotationMethod", "minimumMomentOfInertia", "splitting",
-                      "thermostat", "thermostatTemperature", "thermostatCollisionTime", "randomSeed", "explicitBodies"):
+                      "thermostat", "thermostatTemperature", "thermostatCollisionTime", "randomSeed", "explicitBodies",
+                      "measureShadowWork", "measureHeat", "accuracyCheck"):
         assert attribute + "=" in xml
     assert xml.count("<Body>") == 2 and xml.count("<Particle") == 4
 

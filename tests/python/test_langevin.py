@@ -37,7 +37,8 @@ def settings(integrator):
     """Every setting a copy must keep."""
     return (integrator.getTemperature(), integrator.getFriction(), integrator.getRandomNumberSeed(),
             integrator.getStepSize(), integrator.getConstraintTolerance(), integrator.getIntegrationForceGroups(),
-            integrator.getRotationMethod(), integrator.getMinimumMomentOfInertia(), integrator.hasExplicitBodies(), integrator.getExplicitBodies())
+            integrator.getRotationMethod(), integrator.getMinimumMomentOfInertia(), integrator.hasExplicitBodies(), integrator.getExplicitBodies(),
+            integrator.getMeasureShadowWork(), integrator.getMeasureHeat(), integrator.getAccuracyCheck())
 
 
 def configured(bodies):
@@ -49,6 +50,9 @@ def configured(bodies):
     integrator.setIntegrationForceGroups({0, 2, 5})
     integrator.setRotationMethod(RigidBodyLangevinIntegrator.NoSquish)
     integrator.setMinimumMomentOfInertia(0.0125)
+    integrator.setMeasureShadowWork(True)
+    integrator.setMeasureHeat(True)
+    integrator.setAccuracyCheck(False)
     return integrator
 
 
@@ -300,7 +304,8 @@ def test_xml_format_and_versions():
     xml = openmm.XmlSerializer.serialize(configured([[0, 1, 2], [3]]))
     assert 'type="RigidBodyLangevinIntegrator"' in xml and 'version="2"' in xml
     for attribute in ("temperature", "friction", "randomSeed", "stepSize", "constraintTolerance",
-                      "integrationForceGroups", "rotationMethod", "minimumMomentOfInertia", "explicitBodies"):
+                      "integrationForceGroups", "rotationMethod", "minimumMomentOfInertia", "explicitBodies", "measureShadowWork", "measureHeat",
+                      "accuracyCheck"):
         assert attribute + "=" in xml
     minimal = ('<?xml version="1.0" ?>\n<Integrator temperature="250" friction="3" stepSize=".004" '
                'type="RigidBodyLangevinIntegrator" version="1"/>\n')

@@ -156,3 +156,27 @@ def test_the_columns_need_a_rigid_body_integrator():
     simulation.reporters.append(openmmrigid.RigidStateDataReporter(io.StringIO(), 1, rotationalKineticEnergy=True))
     with pytest.raises(ValueError, match="rotationalKineticEnergy need a RigidBodyIntegrator"):
         simulation.step(1)
+
+
+def test_shadow_work_and_heat_columns():
+    """The columns are the integrator's sums (which test_shadow_work.py checks) at the report."""
+    integrator = openmmrigid.RigidBodyLangevinIntegrator(300, 5, 0.002, systems.cluster(seed=8).bodies)
+    integrator.setMeasureShadowWork(True)
+    integrator.setMeasureHeat(True)
+    simulation, _ = clusterSimulation(integrator)
+    output = io.StringIO()
+    simulation.reporters.append(openmmrigid.RigidStateDataReporter(output, 5, step=True, totalEnergy=True,
+                                                                   shadowWork=True, heat=True))
+    simulation.step(20)
+    header, rows = readCsv(output.getvalue())
+    assert header[-2:] == ["Shadow Work (kJ/mole)", "Heat (kJ/mole)"]
+    assert rows[-1][2] == integrator.getShadowWork().value_in_unit(unit.kilojoule_per_mole)
+    assert rows[-1][3] == integrator.getHeat().value_in_unit(unit.kilojoule_per_mole)
+    assert len(rows) == 4 and rows[0][3] != 0.0
+
+
+def test_shadow_work_column_needs_the_measurement():
+    simulation, _ = clusterSimulation()
+    simulation.reporters.append(openmmrigid.RigidStateDataReporter(io.StringIO(), 1, shadowWork=True))
+    with pytest.raises(ValueError, match=r"setMeasureShadowWork\(True\)"):
+        simulation.step(1)

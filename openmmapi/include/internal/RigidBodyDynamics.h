@@ -154,6 +154,14 @@ public:
     void closingKick(std::vector<OpenMM::Vec3>& positions, std::vector<OpenMM::Vec3>& velocities,
                      const std::vector<OpenMM::Vec3>& forces, double kick, double constraintTolerance);
     /**
+     * Write every body's rigid velocities v = V + omega x (r - R), from the momenta the stages have
+     * made so far, to its particles (and record them as written, so that the next stage keeps those
+     * momenta): within a step, before computeKineticEnergies() is asked for the energy of the momenta
+     * now (the heat of a Langevin step's Ornstein-Uhlenbeck stage). Free particles' velocities are
+     * always current. Changes no momentum.
+     */
+    void writeBodyVelocities(const std::vector<OpenMM::Vec3>& positions, std::vector<OpenMM::Vec3>& velocities);
+    /**
      * Split the kinetic energy of the velocities: the translation of the bodies' centres plus the free
      * particles, and the rest of the bodies' kinetic energy (their rotation, for rigid velocities).
      */
@@ -199,6 +207,8 @@ private:
     void fitBody(int b, std::vector<OpenMM::Vec3>& positions, std::vector<OpenMM::Vec3>& velocities);
     /** Replace body b's particle velocities by the rigid motion with their linear and angular momentum. */
     void projectBodyVelocities(int b, std::vector<OpenMM::Vec3>& velocities);
+    /** Write body b's rigid velocities v = V + omega x (r - R) to its particles. */
+    void writeRigidVelocities(int b, const std::vector<OpenMM::Vec3>& positions, std::vector<OpenMM::Vec3>& velocities);
     /** The body-frame angular velocity I^-1 L of body b; a zero moment (the axis of a linear body) carries none. */
     Vector3 bodyAngularVelocity(int b, const Vector3& bodyAngularMomentum) const;
     RigidBodySystem& system;

@@ -18,12 +18,23 @@ struct StepGeometry;
 
 /**
  * What the step sequence keeps from step to step, besides the Context: the key of the random numbers
- * and how many stages have drawn from it, and the energy the thermostat has put in. Checkpoints save
- * it (RigidBodyIntegratorBase::createCheckpoint()).
+ * and how many stages have drawn from it, the energy the thermostat has put in, and, while they are
+ * measured, the shadow work and the heat. Checkpoints save all but the potential energy
+ * (RigidBodyIntegratorBase::createCheckpoint()).
  */
 struct StepState {
     uint64_t seed = 0, randomCounter = 0;
     double thermostatWork = 0.0;
+    /** The energy change of the deterministic stages and of the stochastic ones, in kJ/mol, summed while measured. */
+    double shadowWork = 0.0, heat = 0.0;
+    /**
+     * The potential energy of the integration force groups at the current positions, in kJ/mol,
+     * valid if potentialKnown: from the step's last force evaluation, while shadow work is measured.
+     */
+    double potentialEnergy = 0.0;
+    bool potentialKnown = false;
+    /** The last step's shadow work and the kinetic energy after it, in kJ/mol, if it measured them (for the accuracy check). */
+    double stepShadowWork = 0.0, stepKinetic = 0.0;
 };
 
 /**
@@ -42,8 +53,12 @@ OPENMM_EXPORT_RIGID StepGeometry currentGeometry(OpenMM::ContextImpl& context, c
  * One step of RigidBodyIntegrator, on any platform: the kicks and drifts of its splitting
  * (internal/Splitting.h) with the virtual sites placed and the forces evaluated after each drift,
  * then, if it has one, the thermostat's rescaling of every momentum. On entry the Context holds the
- * forces at the current positions and the kernel's bodies agree with them; on exit it holds the
- * forces at the new positions.
+ * forces at the current positions and the kernel's bodies agree with them (and, if shadow work is
+ * measured, state.potentialEnergy is their energy); on exit it holds the forces at the new positions.
+ *
+ * Shadow work: the step's change of K + U before the rescaling, which is the sum over its kicks
+ * (the kinetic energy they add) and drifts (the potential energy they add; an exact drift keeps the
+ * kinetic energy). Heat: the kinetic energy the rescaling adds.
  */
 OPENMM_EXPORT_RIGID void stepRigidBodyIntegrator(OpenMM::ContextImpl& context, IntegrateRigidBodyStepKernel& kernel,
         const RigidBodyIntegrator& integrator, const RigidBodySystem& bodies, StepState& state);
@@ -53,6 +68,9 @@ OPENMM_EXPORT_RIGID void stepRigidBodyIntegrator(OpenMM::ContextImpl& context, I
  * step, half drift, force evaluation (LFMiddle). On entry the Context holds the forces at the current
  * positions and velocities half a step behind them; on exit, the forces at the new positions and
  * the velocities half a step behind those.
+ *
+ * Heat: the kinetic energy the Ornstein-Uhlenbeck stage adds. Shadow work: the rest of the step's
+ * change of K + U, which is the kick's kinetic energy and the drifts' potential energy.
  */
 OPENMM_EXPORT_RIGID void stepRigidBodyLangevinIntegrator(OpenMM::ContextImpl& context, IntegrateRigidBodyStepKernel& kernel,
         const RigidBodyLangevinIntegrator& integrator, const RigidBodySystem& bodies, StepState& state);

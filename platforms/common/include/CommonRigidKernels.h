@@ -44,6 +44,7 @@ public:
     void closingKick(OpenMM::ContextImpl& context, double kick, double constraintTolerance) override;
     void thermalize(OpenMM::ContextImpl& context, double c, double kT, uint64_t seed, uint64_t counter,
                     double constraintTolerance) override;
+    void writeBodyVelocities(OpenMM::ContextImpl& context) override;
     void scaleMomenta(OpenMM::ContextImpl& context, double alpha) override;
     void computeKineticEnergies(OpenMM::ContextImpl& context, double& translational, double& rotational) override;
     double computeKineticEnergy(OpenMM::ContextImpl& context) override;

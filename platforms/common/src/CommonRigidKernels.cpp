@@ -753,6 +753,17 @@ void CommonIntegrateRigidBodyStepKernel::thermalize(ContextImpl& context, double
         d.solver->applyVelocityConstraints(constraintTolerance);
 }
 
+void CommonIntegrateRigidBodyStepKernel::writeBodyVelocities(ContextImpl& context) {
+    Impl& d = *impl;
+    ContextSelector selector(cc);
+    // rigidClosingKick with no kick: the rigid velocities written (and recorded as written), no
+    // velocity constraints, and no status check (that waits for the step's last force evaluation).
+    if (d.numBodies > 0) {
+        d.closingKick->setArg(12, 0.0);
+        d.closingKick->execute(d.numBodies);
+    }
+}
+
 void CommonIntegrateRigidBodyStepKernel::scaleMomenta(ContextImpl& context, double alpha) {
     Impl& d = *impl;
     ContextSelector selector(cc);

@@ -31,6 +31,7 @@ public:
                       double constraintTolerance);
     void closingKick(OpenMM::ContextImpl& context, double kick, double constraintTolerance);
     void thermalize(OpenMM::ContextImpl& context, double c, double kT, uint64_t seed, uint64_t counter, double constraintTolerance);
+    void writeBodyVelocities(OpenMM::ContextImpl& context);
     void scaleMomenta(OpenMM::ContextImpl& context, double alpha);
     void computeKineticEnergies(OpenMM::ContextImpl& context, double& translational, double& rotational);
     double computeKineticEnergy(OpenMM::ContextImpl& context);

@@ -124,6 +124,10 @@ void ReferenceIntegrateRigidBodyStepKernel::thermalize(ContextImpl& context, dou
     dynamics->thermalize(extractPositions(context), extractVelocities(context), c, kT, seed, counter, constraintTolerance);
 }
 
+void ReferenceIntegrateRigidBodyStepKernel::writeBodyVelocities(ContextImpl& context) {
+    dynamics->writeBodyVelocities(extractPositions(context), extractVelocities(context));
+}
+
 void ReferenceIntegrateRigidBodyStepKernel::scaleMomenta(ContextImpl& context, double alpha) {
     dynamics->scaleMomenta(extractVelocities(context), alpha);
 }

@@ -17,6 +17,11 @@ Running and measuring
     equilibrateByRedraws(), compressBox(), sampleNVE(), energyDrift(), blockAverage(),
     rigidTemperatures(), shapeDeviations(), bodyKinds(), degreesOfFreedom().
 
+openmmrigid.testing.samplingerror
+    The near-equilibrium estimate of the configuration-space KL divergence from shadow work
+    (``configurationKL``), and a 1-D harmonic oscillator whose exact value is known, shared by
+    benchmarks/sampling_error.py and the test suite.
+
 openmmrigid.testing.stress
     The stability stress scenarios (extreme body shapes in a hot bath, a fast spinning body, hot
     clusters and water) and their measurements, shared by benchmarks/stress.py and the test suite.

@@ -1,0 +1,133 @@
+#!/usr/bin/env python
+"""The accuracy check (setAccuracyCheck(), on by default) on the runs of issue 23's table: which fire,
+after how many ps, and which stay quiet, with the figure of every 2 ps window.
+
+System: rigid water (openmmrigid.testing.waterBox: TIP3P unless --model, PME 0.9 nm), minimized and
+equilibrated 5 ps with LangevinMiddleIntegrator + SETTLE at 2 fs and 300 K; every run starts from that
+state. Each run measures its shadow work (setMeasureShadowWork) and reads it every 0.05 ps, with the
+kinetic energy: the figure of each 2 ps window is computed here from those samples (the heating
+2 W_step / ((1 - c^2) dof kT) for Langevin, the fluctuation of the shadow work about its trend over
+the kinetic energy's otherwise), next to the time the integrator's own check fired (None: quiet).
+
+Runs (name: integrator, step): L<dt>f<friction>: RigidBodyLangevinIntegrator; BV<dt>, BO<dt>:
+RigidBodyIntegrator with the Bussi thermostat (tau 1 ps), Verlet or Omelyan2; NVE<dt>, NVEO<dt>:
+without a thermostat.
+
+    python benchmarks/accuracy_check.py --quick          # 216 waters, L8f1 and L10f1, 10 ps each: minutes
+    python benchmarks/accuracy_check.py                   # every run, 216 waters, 40 ps: docs/results/accuracy_check.md
+    python benchmarks/accuracy_check.py --molecules 500 --runs L10f1 BV6 L8f1 BO6 --time 30
+"""
+
+import argparse
+import re
+import time
+import warnings
+
+import numpy as np
+import openmm
+from openmm import unit
+
+import benchmarking
+from benchmarking import say, stamp
+import openmmrigid
+from openmmrigid.testing import waterBox
+
+KJ = unit.kilojoule_per_mole
+R = unit.MOLAR_GAS_CONSTANT_R.value_in_unit(KJ/unit.kelvin)
+RUNS = ["L10f1", "L11f1", "BV6", "BV8", "NVE10", "L1f1", "L2f1", "L4f1", "L6f1", "L8f1", "L10f10", "BO6", "BO8", "BV4",
+        "NVE2", "NVE4", "NVE6", "NVE7", "NVEO6"]
+
+
+def makeIntegrator(name):
+    match = re.fullmatch(r"(L|BV|BO|NVEO|NVE)(\d+)(?:f(\d+))?", name)
+    if match is None:
+        raise SystemExit(f"unknown run {name}")
+    kind, step, friction = match.group(1), float(match.group(2))*1e-3, match.group(3)
+    if kind == "L":
+        return openmmrigid.RigidBodyLangevinIntegrator(300, float(friction or 1), step)
+    integrator = openmmrigid.RigidBodyIntegrator(step)
+    integrator.setSplitting(openmmrigid.RigidBodyIntegrator.Omelyan2 if kind in ("BO", "NVEO") else openmmrigid.RigidBodyIntegrator.Verlet)
+    if kind in ("BV", "BO"):
+        integrator.setThermostat(300, 1.0)
+    return integrator
+
+
+def run(name, system, state, platform, properties, picoseconds, every=0.05):
+    integrator = makeIntegrator(name)
+    dt = integrator.getStepSize().value_in_unit(unit.picosecond)
+    context = openmm.Context(system, integrator, platform, properties)
+    context.setState(state)
+    integrator.setMeasureShadowWork(True)
+    dof = integrator.getNumDegreesOfFreedom()
+    n = max(1, int(round(every/dt)))
+    rows, fired, failure = [], None, ""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", openmmrigid.AccuracyWarning)
+        try:
+            for i in range(int(round(picoseconds/dt/n))):
+                integrator.step(n)
+                kinetic = context.getState(getEnergy=True).getKineticEnergy().value_in_unit(KJ)
+                rows.append(((i + 1)*n*dt, integrator.getShadowWork().value_in_unit(KJ), kinetic))
+                if fired is None and integrator.getAccuracyWarning():
+                    fired = (i + 1)*n*dt
+        except openmm.OpenMMException as error:
+            failure = f"unstable at {len(rows)*n*dt:.1f} ps"
+    times, work, kinetic = np.array(rows).T
+    friction = integrator.getFriction().value_in_unit(unit.picosecond**-1) if hasattr(integrator, "getFriction") else 0.0
+    figures, m = [], int(round(2.0/(n*dt)))
+    for k in range(len(times)//m):
+        t, w, K = times[k*m:(k + 1)*m], work[k*m:(k + 1)*m], kinetic[k*m:(k + 1)*m]
+        fit = np.polyfit(t, w, 1)
+        if friction > 0:
+            c = np.exp(-friction*dt)
+            figures.append(2*fit[0]*dt/((1 - c*c)*dof*R*300))
+        else:
+            figures.append((w - np.polyval(fit, t)).std()/K.std())
+    temperature = 2*kinetic[len(kinetic)//5:].mean()/(dof*R)
+    return dict(run=name, temperature=float(temperature), fired=fired, failure=failure,
+                low=float(min(figures)) if figures else np.nan, high=float(max(figures)) if figures else np.nan,
+                kind="heating" if friction > 0 else "fluctuation", message=integrator.getAccuracyWarning())
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--quick", action="store_true")
+    parser.add_argument("--runs", nargs="+", default=None)
+    parser.add_argument("--model", default="tip3p")
+    parser.add_argument("--molecules", type=int, default=216)
+    parser.add_argument("--time", type=float, default=None, help="ps per run (default 40; 10 with --quick)")
+    parser.add_argument("--threads", type=int, default=1)
+    args = parser.parse_args()
+    runs = args.runs or (["L8f1", "L10f1"] if args.quick else RUNS)
+    picoseconds = args.time or (10.0 if args.quick else 40.0)
+    platform = openmm.Platform.getPlatformByName("CPU")
+    properties = {"Threads": str(args.threads)}
+    _, positions, system = waterBox(args.model, molecules=args.molecules)
+    equilibration = openmm.LangevinMiddleIntegrator(300, 1, 0.002)
+    context = openmm.Context(system, equilibration, platform, properties)
+    context.setPositions(positions)
+    openmm.LocalEnergyMinimizer.minimize(context)
+    context.setVelocitiesToTemperature(300, 1)
+    equilibration.step(2500)
+    state = context.getState(getPositions=True, getVelocities=True)
+    del context
+    document = benchmarking.ResultsDocument("accuracy_check", "The accuracy check on runs inside and outside their range",
+                                            quick=args.quick, platform="CPU", threads=args.threads,
+                                            about="Method: the docstring of `benchmarks/accuracy_check.py`.")
+    table = []
+    for name in runs:
+        started = time.perf_counter()
+        result = run(name, system, state, platform, properties, picoseconds)
+        stamp(f"{name}: T {result['temperature']:.1f} K, fired {result['fired']}, {result['kind']} {result['low']:.3f} to "
+              f"{result['high']:.3f} {result['failure']} ({time.perf_counter() - started:.0f} s)")
+        table.append([name, f"{result['temperature']:.1f}", "quiet" if result["fired"] is None else f"at {result['fired']:.1f} ps",
+                      f"{result['kind']} {result['low']:.3f} to {result['high']:.3f}", result["failure"]])
+        if result["message"]:
+            say(f"  {result['message']}")
+    document.section("Runs", f"{args.molecules} {args.model} waters, {picoseconds:g} ps per run.")
+    document.table(["run", "T (K)", "check", "figure per 2 ps window", "note"], table)
+    document.write()
+
+
+if __name__ == "__main__":
+    main()

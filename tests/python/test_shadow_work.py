@@ -1,0 +1,428 @@
+"""Shadow work, heat and the accuracy check of both integrators:
+
+- a rigid body (its particles in a harmonic trap whose stiffness is proportional to their mass, so
+  that its centre oscillates and it feels no torque: the rotation stays free) and a free particle in
+  the same trap: the shadow work of each step of RigidBodyIntegrator equals the analytic energy change
+  of its substeps (the kicks' kinetic energy and the drifts' potential energy, followed in Python
+  through the splitting's table), for Verlet and Omelyan2; for RigidBodyLangevinIntegrator the shadow
+  work and the heat of each step equal those reconstructed from the states before and after it (the
+  kick's kinetic energy and the potential energy change; the Ornstein-Uhlenbeck stage's kinetic energy);
+- a free asymmetric top: zero shadow work with the exact drift (to rounding), not with NoSquish;
+  with friction, the heat is then the whole energy change;
+- energy accounting: shadow work + heat = the change of K + U, with the Bussi thermostat (whose heat
+  is its work) and with Langevin, on Reference and CPU; measuring changes no trajectory (Reference,
+  bit for bit); checkpoints keep the sums; reset and the getters in kT;
+- the accuracy check fires on rigid water driven past its range (Langevin at 11 fs and friction
+  1/ps; Verlet with the Bussi thermostat at 8 fs) within a few ps, naming the step and the remedies,
+  once, as an AccuracyWarning, and stays quiet in long runs inside it (Langevin at 4 fs, Omelyan2 with
+  the Bussi thermostat at 6 fs); switched off it measures nothing.
+"""
+
+import io
+import warnings
+
+import numpy as np
+import openmm
+import openmm.app as app
+import openmm.unit as unit
+import pytest
+
+import openmmrigid
+import systems
+from openmmrigid import AccuracyWarning, RigidBodyIntegrator, RigidBodyLangevinIntegrator
+
+KJ = unit.kilojoule_per_mole
+BOLTZMANN = unit.MOLAR_GAS_CONSTANT_R.value_in_unit(KJ / unit.kelvin)
+OMELYAN_LAMBDA = 0.1931833275037836
+# Kicks and drifts of each splitting, in units of the step (RigidBodyIntegrator.setSplitting()).
+SPLITTINGS = {
+    "Verlet": (RigidBodyIntegrator.Verlet, [0.5, 0.5], [1.0]),
+    "Omelyan2": (RigidBodyIntegrator.Omelyan2, [OMELYAN_LAMBDA, 1 - 2 * OMELYAN_LAMBDA, OMELYAN_LAMBDA], [0.5, 0.5]),
+}
+
+# An asymmetric body (particles 0-3) and a free particle (4), all in the trap U = kappa m |r|^2 / 2.
+MASSES = np.array([12.0, 1.0, 16.0, 14.0, 20.0])
+POSITIONS = np.array([[0.10, 0.02, -0.03], [0.21, 0.05, -0.01], [0.08, 0.15, 0.02], [0.04, -0.03, 0.12], [-0.2, 0.1, 0.05]])
+BODY = [0, 1, 2, 3]
+KAPPA = 2000.0  # 1/ps^2: omega = 44.7/ps, a period of 0.14 ps
+
+
+def trap_system(kappa=KAPPA):
+    system = openmm.System()
+    trap = openmm.CustomExternalForce("0.5*k*(x^2 + y^2 + z^2)")
+    trap.addPerParticleParameter("k")
+    for i, mass in enumerate(MASSES):
+        system.addParticle(mass)
+        trap.addParticle(i, [kappa * mass])
+    system.addForce(trap)
+    return system
+
+
+def trap_energy(positions, kappa=KAPPA):
+    return 0.5 * kappa * np.sum(MASSES * np.sum(positions**2, axis=1))
+
+
+def state_of(context):
+    state = context.getState(getPositions=True, getVelocities=True)
+    return (np.asarray(state.getPositions(asNumpy=True).value_in_unit(unit.nanometer)),
+            np.asarray(state.getVelocities(asNumpy=True).value_in_unit(unit.nanometer / unit.picosecond)))
+
+
+def kinetic_parts(velocities):
+    """The translational kinetic energy of the body's centre plus the free particle, and the body's rotational one."""
+    masses = MASSES[BODY]
+    centre = masses @ velocities[BODY] / masses.sum()
+    translational = 0.5 * masses.sum() * centre @ centre + 0.5 * MASSES[4] * velocities[4] @ velocities[4]
+    rotational = 0.5 * np.sum(masses * np.sum((velocities[BODY] - centre)**2, axis=1))
+    return translational, rotational
+
+
+def trap_context(integrator, platformName="Reference", kappa=KAPPA):
+    context = openmm.Context(trap_system(kappa), integrator, openmm.Platform.getPlatformByName(platformName))
+    context.setPositions(POSITIONS)
+    rng = np.random.default_rng(5)
+    context.setVelocities(rng.normal(0.0, 1.0, (5, 3)) / np.sqrt(MASSES)[:, None] * 3.0)
+    return context
+
+
+def centre_and_free(positions, velocities):
+    """(mass, position, velocity) of the body's centre and of the free particle."""
+    masses = MASSES[BODY]
+    return [(masses.sum(), masses @ positions[BODY] / masses.sum(), masses @ velocities[BODY] / masses.sum()),
+            (MASSES[4], positions[4].copy(), velocities[4].copy())]
+
+
+@pytest.mark.parametrize("name", list(SPLITTINGS))
+def test_rigid_body_integrator_shadow_work_is_the_substeps_energy_change(name):
+    """Each step's shadow work is the sum of the kicks' kinetic energy and the drifts' potential energy,
+    followed in Python through the splitting (the rotation is free: no torque, exact drift)."""
+    splitting, kicks, drifts = SPLITTINGS[name]
+    dt = 0.004
+    integrator = RigidBodyIntegrator(dt, [BODY])
+    integrator.setSplitting(splitting)
+    integrator.setMeasureShadowWork(True)
+    context = trap_context(integrator)
+    previous = 0.0
+    for step in range(40):
+        positions, velocities = state_of(context)
+        expected = 0.0
+        moved = []
+        for mass, x, v in centre_and_free(positions, velocities):
+            # A particle of mass m in the trap kappa m |x|^2 / 2: kick v -= kappa x h, drift x += v h.
+            for stage in range(len(drifts)):
+                before = 0.5 * mass * v @ v
+                v = v - KAPPA * x * kicks[stage] * dt
+                expected += 0.5 * mass * v @ v - before
+                before = 0.5 * KAPPA * mass * x @ x
+                x = x + v * drifts[stage] * dt
+                expected += 0.5 * KAPPA * mass * x @ x - before
+            before = 0.5 * mass * v @ v
+            v = v - KAPPA * x * kicks[-1] * dt
+            expected += 0.5 * mass * v @ v - before
+            moved.append((x, v))
+        integrator.step(1)
+        work = integrator.getShadowWork().value_in_unit(KJ)
+        after, afterVelocities = state_of(context)
+        (centre, centreVelocity), (free, freeVelocity) = moved
+        assert np.allclose(MASSES[BODY] @ after[BODY] / MASSES[BODY].sum(), centre, rtol=0, atol=1e-12)
+        assert np.allclose(after[4], free, rtol=0, atol=1e-12)
+        scale = trap_energy(positions) + sum(kinetic_parts(velocities))
+        assert abs((work - previous) - expected) < 1e-9 * scale, (step, work - previous, expected)
+        previous = work
+    assert abs(previous) > 1e-6 * scale  # the trap at omega dt = 0.18 does make shadow work
+
+
+def test_langevin_shadow_work_and_heat_of_each_step():
+    """Kick, half drift, O, half drift: from the states before and after a step, the kick's velocity
+    v_B = v_0 + F(x_0) dt / m; the O stage's output is the velocity after the step (the drifts keep it),
+    so shadow work = K(v_B) - K(v_0) + U(x_1) - U(x_0) and heat = K(v_1) - K(v_B) (the body's rotational
+    energy changes only in O: no torque, exact drift)."""
+    dt = 0.004
+    integrator = RigidBodyLangevinIntegrator(300, 20, dt, [BODY])
+    integrator.setRandomNumberSeed(3)
+    integrator.setMeasureShadowWork(True)
+    integrator.setMeasureHeat(True)
+    context = trap_context(integrator)
+    previousWork = previousHeat = 0.0
+    for step in range(40):
+        positions, velocities = state_of(context)
+        integrator.step(1)
+        after, afterVelocities = state_of(context)
+        work = integrator.getShadowWork().value_in_unit(KJ)
+        heat = integrator.getHeat().value_in_unit(KJ)
+        expectedWork = trap_energy(after) - trap_energy(positions)
+        expectedHeat = kinetic_parts(afterVelocities)[1] - kinetic_parts(velocities)[1]
+        for (mass, x, v), (_, _, v1) in zip(centre_and_free(positions, velocities), centre_and_free(after, afterVelocities)):
+            kicked = v - KAPPA * x * dt
+            expectedWork += 0.5 * mass * (kicked @ kicked - v @ v)
+            expectedHeat += 0.5 * mass * (v1 @ v1 - kicked @ kicked)
+        scale = trap_energy(positions) + sum(kinetic_parts(velocities))
+        assert abs((work - previousWork) - expectedWork) < 1e-9 * scale, step
+        assert abs((heat - previousHeat) - expectedHeat) < 1e-9 * scale, step
+        previousWork, previousHeat = work, heat
+
+
+def free_top_context(integrator):
+    system = openmm.System()
+    for mass in MASSES[BODY]:
+        system.addParticle(mass)
+    context = openmm.Context(system, integrator, openmm.Platform.getPlatformByName("Reference"))
+    context.setPositions(POSITIONS[BODY])
+    # A fast tumble about an axis far from the principal ones, and a drift.
+    omega = np.array([30.0, -55.0, 80.0])
+    velocities = np.cross(omega, POSITIONS[BODY] - MASSES[BODY] @ POSITIONS[BODY] / MASSES[BODY].sum()) + [0.3, -0.2, 0.1]
+    context.setVelocities(velocities)
+    return context
+
+
+def test_free_rotation_makes_no_shadow_work_with_the_exact_drift():
+    results = {}
+    for method in (RigidBodyIntegrator.Exact, RigidBodyIntegrator.NoSquish):
+        integrator = RigidBodyIntegrator(0.005, [BODY])
+        integrator.setRotationMethod(method)
+        integrator.setMeasureShadowWork(True)
+        context = free_top_context(integrator)
+        energy = context.getState(getEnergy=True).getKineticEnergy().value_in_unit(KJ)
+        largest = 0.0
+        for _ in range(50):
+            integrator.step(1)
+            largest = max(largest, abs(integrator.getShadowWork().value_in_unit(KJ)))
+        results[method] = largest / energy
+    assert results[RigidBodyIntegrator.Exact] < 1e-12
+    assert results[RigidBodyIntegrator.NoSquish] > 1e-6  # NO_SQUISH's rotation changes the kinetic energy
+
+
+def test_free_rotation_with_friction_is_all_heat():
+    integrator = RigidBodyLangevinIntegrator(300, 5, 0.005, [BODY])
+    integrator.setMeasureShadowWork(True)
+    integrator.setMeasureHeat(True)
+    context = free_top_context(integrator)
+    start = context.getState(getEnergy=True).getKineticEnergy().value_in_unit(KJ)
+    integrator.step(50)
+    end = context.getState(getEnergy=True).getKineticEnergy().value_in_unit(KJ)
+    assert abs(integrator.getShadowWork().value_in_unit(KJ)) < 1e-12 * start
+    assert integrator.getHeat().value_in_unit(KJ) == pytest.approx(end - start, rel=1e-12, abs=1e-12 * start)
+
+
+def total_energy(context, integrator):
+    state = context.getState(getEnergy=True, groups=integrator.getIntegrationForceGroups())
+    return (state.getKineticEnergy() + state.getPotentialEnergy()).value_in_unit(KJ)
+
+
+@pytest.fixture(scope="module")
+def water_state():
+    """About 100 TIP3P waters with a reaction-field cutoff of 0.6 nm (no CMMotionRemover), minimised
+    and thermalised at 300 K with LangevinMiddleIntegrator + SETTLE."""
+    forcefield = app.ForceField("amber14/tip3p.xml")
+    modeller = app.Modeller(app.Topology(), [])
+    modeller.addSolvent(forcefield, model="tip3p", boxSize=openmm.Vec3(1.5, 1.5, 1.5) * unit.nanometer)
+    system = forcefield.createSystem(modeller.topology, nonbondedMethod=app.CutoffPeriodic,
+                                     nonbondedCutoff=0.6 * unit.nanometer, rigidWater=True, removeCMMotion=False)
+    thermostat = openmm.LangevinMiddleIntegrator(300 * unit.kelvin, 10 / unit.picosecond, 2 * unit.femtoseconds)
+    thermostat.setRandomNumberSeed(7)
+    context = openmm.Context(system, thermostat, *systems.platform_and_properties("CPU"))
+    context.setPositions(modeller.positions)
+    openmm.LocalEnergyMinimizer.minimize(context, 10.0, 200)
+    context.setVelocitiesToTemperature(300 * unit.kelvin, 7)
+    thermostat.step(1000)
+    return system, context.getState(getPositions=True, getVelocities=True)
+
+
+def water_context(water_state, integrator, platformName="CPU"):
+    system, state = water_state
+    context = openmm.Context(system, integrator, *systems.platform_and_properties(platformName))
+    context.setState(state)
+    return context
+
+
+@pytest.mark.parametrize("platformName", ["Reference", "CPU"] + systems.GPU_PLATFORMS[:1])
+@pytest.mark.parametrize("kind", ["langevin", "bussi-omelyan2"])
+def test_shadow_work_and_heat_make_up_the_energy_change(water_state, platformName, kind):
+    if kind == "langevin":
+        integrator = RigidBodyLangevinIntegrator(300, 5, 0.004)
+    else:
+        integrator = RigidBodyIntegrator(0.004)
+        integrator.setSplitting(RigidBodyIntegrator.Omelyan2)
+        integrator.setThermostat(300, 0.05)
+    integrator.setMeasureShadowWork(True)
+    integrator.setMeasureHeat(True)
+    context = water_context(water_state, integrator, platformName)
+    integrator.step(1)
+    integrator.resetShadowWork()
+    integrator.resetHeat()
+    assert integrator.getShadowWork().value_in_unit(KJ) == 0 and integrator.getHeat().value_in_unit(KJ) == 0
+    start = total_energy(context, integrator)
+    thermostatStart = integrator.getThermostatWork().value_in_unit(KJ) if kind != "langevin" else 0.0
+    integrator.step(30)
+    change = total_energy(context, integrator) - start
+    work, heat = integrator.getShadowWork().value_in_unit(KJ), integrator.getHeat().value_in_unit(KJ)
+    scale = abs(start)
+    tolerance = 1e-9 if platformName != "OpenCL" else 1e-5  # single precision on the device
+    assert abs(work + heat - change) < tolerance * scale, (work, heat, change)
+    assert work != 0 and heat != 0  # both measured
+    if kind != "langevin":
+        assert heat == pytest.approx(integrator.getThermostatWork().value_in_unit(KJ) - thermostatStart, rel=1e-12)
+    kT = BOLTZMANN * 300
+    assert integrator.getShadowWorkInKT() == pytest.approx(work / kT, rel=1e-12)
+    assert integrator.getHeatInKT() == pytest.approx(heat / kT, rel=1e-12)
+
+
+@pytest.mark.parametrize("kind", ["langevin", "verlet"])
+def test_measuring_changes_no_trajectory(kind):
+    """On Reference, bit for bit: measuring (and the accuracy check) reads, never writes, the state."""
+    results = []
+    for measure in (False, True):
+        integrator = (RigidBodyLangevinIntegrator(300, 20, 0.004, [BODY]) if kind == "langevin" else RigidBodyIntegrator(0.004, [BODY]))
+        integrator.setRandomNumberSeed(9)
+        integrator.setMeasureShadowWork(measure)
+        integrator.setMeasureHeat(measure)
+        integrator.setAccuracyCheck(measure)
+        context = trap_context(integrator)
+        integrator.step(25)
+        results.append(state_of(context))
+    for a, b in zip(results[0], results[1]):
+        assert np.array_equal(a, b)
+
+
+def test_checkpoint_keeps_the_sums_and_errors_name_the_class():
+    unmeasured = RigidBodyLangevinIntegrator(300, 20, 0.004, [BODY])
+    unmeasuredContext = trap_context(unmeasured)
+    with pytest.raises(openmm.OpenMMException, match="RigidBodyLangevinIntegrator.getShadowWork: .*setMeasureShadowWork"):
+        unmeasured.getShadowWork()
+    del unmeasuredContext
+    integrator = RigidBodyLangevinIntegrator(300, 20, 0.004, [BODY])
+    integrator.setRandomNumberSeed(4)
+    integrator.setMeasureShadowWork(True)
+    integrator.setMeasureHeat(True)
+    context = trap_context(integrator)
+    integrator.step(10)
+    checkpoint = context.createCheckpoint()
+    saved = (integrator.getShadowWork(), integrator.getHeat())
+    integrator.step(10)
+    continued = (integrator.getShadowWork(), integrator.getHeat(), state_of(context))
+    context.loadCheckpoint(checkpoint)
+    assert (integrator.getShadowWork(), integrator.getHeat()) == saved
+    integrator.step(10)
+    # The first step after the load takes its starting energy from a new evaluation (and the loaded
+    # velocities' projection): equal to the continued run's to rounding.
+    for value, expected in zip((integrator.getShadowWork(), integrator.getHeat()), continued[:2]):
+        assert value.value_in_unit(KJ) == pytest.approx(expected.value_in_unit(KJ), rel=1e-12)
+    for a, b in zip(state_of(context), continued[2]):
+        assert np.allclose(a, b, rtol=0, atol=1e-10)  # the loaded state is fitted again: equal to rounding
+    plain = RigidBodyIntegrator(0.004, [BODY])
+    plain.setMeasureShadowWork(True)
+    plainContext = trap_context(plain)
+    with pytest.raises(openmm.OpenMMException, match="RigidBodyIntegrator.getShadowWorkInKT.*no thermostat"):
+        plain.getShadowWorkInKT()
+    with pytest.raises(openmm.OpenMMException, match="RigidBodyIntegrator.getHeat: .*setMeasureHeat"):
+        plain.getHeat()
+
+
+# ------------------------------------------------------------------------------------------------
+# The accuracy check
+# ------------------------------------------------------------------------------------------------
+
+def run_checked(water_state, integrator, picoseconds, chunk=0.5):
+    """Step in chunks of `chunk` ps until the check fires or `picoseconds` have passed: the time it
+    fired (None if not), and the AccuracyWarnings step() issued."""
+    context = water_context(water_state, integrator)
+    dt = integrator.getStepSize().value_in_unit(unit.picosecond)
+    steps = int(round(chunk / dt))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", AccuracyWarning)
+        for i in range(int(round(picoseconds / chunk))):
+            integrator.step(steps)
+            if integrator.getAccuracyWarning():
+                integrator.step(steps)  # a later step() does not issue it again
+                del context
+                return (i + 1) * steps * dt, [w for w in caught if issubclass(w.category, AccuracyWarning)]
+    del context
+    return None, [w for w in caught if issubclass(w.category, AccuracyWarning)]
+
+
+def test_accuracy_check_fires_for_langevin_past_its_range(water_state):
+    integrator = RigidBodyLangevinIntegrator(300, 1, 0.011)
+    fired, caught = run_checked(water_state, integrator, 12)
+    assert fired is not None and fired <= 6.0, fired
+    assert len(caught) == 1
+    message = str(caught[0].message)
+    for words in ("RigidBodyLangevinIntegrator at a step of 11 fs", "friction 1/ps", "above the bath", "smaller step",
+                  "more friction", "raised moments of inertia"):
+        assert words in message, (words, message)
+
+
+def test_accuracy_check_fires_for_verlet_with_the_bussi_thermostat_at_8_fs(water_state):
+    integrator = RigidBodyIntegrator(0.008)
+    integrator.setThermostat(300, 1.0)
+    fired, caught = run_checked(water_state, integrator, 12)
+    assert fired is not None and fired <= 6.0, fired
+    assert len(caught) == 1
+    message = str(caught[0].message)
+    for words in ("RigidBodyIntegrator (Verlet with the Bussi thermostat) at a step of 8 fs", "fluctuates", "smaller step",
+                  "Omelyan2", "raised moments of inertia"):
+        assert words in message, (words, message)
+
+
+@pytest.mark.parametrize("kind", ["langevin-4fs", "bussi-omelyan2-6fs"])
+def test_accuracy_check_is_quiet_inside_the_range(water_state, kind):
+    if kind == "langevin-4fs":
+        integrator = RigidBodyLangevinIntegrator(300, 1, 0.004)
+    else:
+        integrator = RigidBodyIntegrator(0.006)
+        integrator.setSplitting(RigidBodyIntegrator.Omelyan2)
+        integrator.setThermostat(300, 1.0)
+    fired, caught = run_checked(water_state, integrator, 20, chunk=5)
+    assert fired is None and not caught, integrator.getAccuracyWarning()
+
+
+def test_accuracy_check_off(water_state):
+    integrator = RigidBodyLangevinIntegrator(300, 1, 0.011)
+    integrator.setAccuracyCheck(False)
+    fired, caught = run_checked(water_state, integrator, 6, chunk=3)
+    assert fired is None and not caught
+
+
+def test_accuracy_check_reads_again_after_a_change_of_step(water_state):
+    """Quiet at 4 fs past its first episode; the step raised to 11 fs starts a new one, which fires."""
+    integrator = RigidBodyLangevinIntegrator(300, 1, 0.004)
+    context = water_context(water_state, integrator)
+    integrator.step(2000)  # 8 ps: the first episode (4 ps) is over
+    assert integrator.getAccuracyWarning() == ""
+    integrator.setStepSize(0.011)
+    with pytest.warns(AccuracyWarning, match="at a step of 11 fs"):
+        integrator.step(int(6.0 / 0.011))
+    del context
+
+
+def test_accuracy_check_is_quiet_when_the_state_is_set_again_and_again(water_state):
+    """Canonical velocities set every 0.5 ps (as a sampling protocol does) make each first kick's
+    shadow work jump (by about (omega dt)^2 kT / 2 per degree of freedom): the check starts its
+    windows again after each and stays quiet at 8 fs."""
+    integrator = RigidBodyLangevinIntegrator(300, 1, 0.008)
+    context = water_context(water_state, integrator)
+    system = water_state[0]
+    masses = np.array([system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles())])
+    rng = np.random.default_rng(1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", AccuracyWarning)
+        for _ in range(20):
+            context.setVelocities(rng.standard_normal((len(masses), 3)) * np.sqrt(BOLTZMANN * 300 / masses)[:, None])
+            integrator.step(62)
+    assert integrator.getAccuracyWarning() == ""
+
+
+def test_accuracy_check_leaves_andersen_runs_alone(water_state):
+    """An AndersenThermostat's redraws are not rigid motion: the next step's projection removes energy
+    (counted as shadow work), which the check would read as a drift; such runs are not checked."""
+    system, state = water_state
+    system = openmm.XmlSerializer.clone(system)
+    system.addForce(openmm.AndersenThermostat(300, 5))
+    integrator = RigidBodyIntegrator(0.002)
+    integrator.setMeasureShadowWork(True)
+    context = openmm.Context(system, integrator, *systems.platform_and_properties("CPU"))
+    context.setState(state)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", AccuracyWarning)
+        integrator.step(2500)
+    assert integrator.getAccuracyWarning() == ""
+    assert integrator.getShadowWork().value_in_unit(KJ) < 0  # the projections' losses are in it
