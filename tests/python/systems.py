@@ -10,7 +10,7 @@ build on them), re-exported here:
 - rigid_motion(): the exact free motion of a set of bodies, from openmmrigid.FreeRotor.
 - energy_drift() and block_drift(), positions_of(), velocities_of(), platform_and_properties().
 
-Defined here: the platforms to test (PLATFORMS, GPU_PLATFORMS), minimize() and make_context(),
+Defined here: the platforms to test (PLATFORMS, GPU_PLATFORMS), minimize(), small_water_box() and make_context(),
 mixed_system() (alanine dipeptide, flexible with HBonds constraints, in rigid TIP3P water with a
 rigid benzene, a rigid linear CO2, a Na+ ion as a single-particle body and a free Cl- ion),
 run_energies(), and the copies of an integrator (COPY_METHODS, copy_integrator()).
@@ -59,6 +59,26 @@ def minimize(context, tolerance=10, maxIterations=100):
     helper.setPositions(state.getPositions())
     openmm.LocalEnergyMinimizer.minimize(helper, tolerance, maxIterations)
     context.setPositions(helper.getState(getPositions=True).getPositions())
+
+
+def small_water_box(equilibrationSteps):
+    """About 100 TIP3P waters (a 1.5 nm box) with a cheap reaction-field cutoff of 0.6 nm and no
+    CMMotionRemover (so that translation and rotation have 3 degrees of freedom per water each),
+    minimised and thermalised at 300 K with LangevinMiddleIntegrator + SETTLE (friction 10/ps, 2 fs,
+    equilibrationSteps steps on the CPU platform): the System and the final State."""
+    forcefield = app.ForceField("amber14/tip3p.xml")
+    modeller = app.Modeller(app.Topology(), [])
+    modeller.addSolvent(forcefield, model="tip3p", boxSize=openmm.Vec3(1.5, 1.5, 1.5) * unit.nanometer)
+    system = forcefield.createSystem(modeller.topology, nonbondedMethod=app.CutoffPeriodic,
+                                     nonbondedCutoff=0.6 * unit.nanometer, rigidWater=True, removeCMMotion=False)
+    thermostat = openmm.LangevinMiddleIntegrator(300 * unit.kelvin, 10 / unit.picosecond, 2 * unit.femtoseconds)
+    thermostat.setRandomNumberSeed(7)
+    context = openmm.Context(system, thermostat, *platform_and_properties("CPU"))
+    context.setPositions(modeller.positions)
+    openmm.LocalEnergyMinimizer.minimize(context, 10.0, 200)
+    context.setVelocitiesToTemperature(300 * unit.kelvin, 7)
+    thermostat.step(equilibrationSteps)
+    return system, context.getState(getPositions=True, getVelocities=True)
 
 
 def make_context(system, integrator, platform_name):

@@ -69,22 +69,8 @@ def trapped_context(platformName, integrator):
 
 @pytest.fixture(scope="module")
 def small_water_box():
-    """About 100 TIP3P waters (a 1.5 nm box) with a cheap reaction-field cutoff of 0.6 nm and no
-    CMMotionRemover (so that translation and rotation have 3 degrees of freedom per water each),
-    minimised and thermalised at 300 K with LangevinMiddleIntegrator + SETTLE."""
-    forcefield = app.ForceField("amber14/tip3p.xml")
-    modeller = app.Modeller(app.Topology(), [])
-    modeller.addSolvent(forcefield, model="tip3p", boxSize=openmm.Vec3(1.5, 1.5, 1.5) * unit.nanometer)
-    system = forcefield.createSystem(modeller.topology, nonbondedMethod=app.CutoffPeriodic,
-                                     nonbondedCutoff=0.6 * unit.nanometer, rigidWater=True, removeCMMotion=False)
-    thermostat = openmm.LangevinMiddleIntegrator(300 * unit.kelvin, 10 / unit.picosecond, 2 * unit.femtoseconds)
-    thermostat.setRandomNumberSeed(7)
-    context = openmm.Context(system, thermostat, *systems.platform_and_properties("CPU"))
-    context.setPositions(modeller.positions)
-    openmm.LocalEnergyMinimizer.minimize(context, 10.0, 200)
-    context.setVelocitiesToTemperature(300 * unit.kelvin, 7)
-    thermostat.step(500)
-    return system, context.getState(getPositions=True, getVelocities=True)
+    """systems.small_water_box() after 500 steps of equilibration."""
+    return systems.small_water_box(500)
 
 
 def assert_water_temperatures(integrator, target, samples, every, blocks, label="", tolerance=None):

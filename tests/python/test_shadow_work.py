@@ -23,7 +23,6 @@ import warnings
 
 import numpy as np
 import openmm
-import openmm.app as app
 import openmm.unit as unit
 import pytest
 
@@ -211,21 +210,8 @@ def total_energy(context, integrator):
 
 @pytest.fixture(scope="module")
 def water_state():
-    """About 100 TIP3P waters with a reaction-field cutoff of 0.6 nm (no CMMotionRemover), minimised
-    and thermalised at 300 K with LangevinMiddleIntegrator + SETTLE."""
-    forcefield = app.ForceField("amber14/tip3p.xml")
-    modeller = app.Modeller(app.Topology(), [])
-    modeller.addSolvent(forcefield, model="tip3p", boxSize=openmm.Vec3(1.5, 1.5, 1.5) * unit.nanometer)
-    system = forcefield.createSystem(modeller.topology, nonbondedMethod=app.CutoffPeriodic,
-                                     nonbondedCutoff=0.6 * unit.nanometer, rigidWater=True, removeCMMotion=False)
-    thermostat = openmm.LangevinMiddleIntegrator(300 * unit.kelvin, 10 / unit.picosecond, 2 * unit.femtoseconds)
-    thermostat.setRandomNumberSeed(7)
-    context = openmm.Context(system, thermostat, *systems.platform_and_properties("CPU"))
-    context.setPositions(modeller.positions)
-    openmm.LocalEnergyMinimizer.minimize(context, 10.0, 200)
-    context.setVelocitiesToTemperature(300 * unit.kelvin, 7)
-    thermostat.step(1000)
-    return system, context.getState(getPositions=True, getVelocities=True)
+    """systems.small_water_box() after 1000 steps of equilibration."""
+    return systems.small_water_box(1000)
 
 
 def water_context(water_state, integrator, platformName="CPU"):
