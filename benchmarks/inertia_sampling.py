@@ -383,6 +383,8 @@ def report(results, quick):
                                provenance=results[0].get("provenance") if results else None)
     for result in results:
         document.section(result["title"])
+        if result.get("provenance"):
+            document.text("This system's run: " + "; ".join(result["provenance"]) + ".")
         reference = result["reference"]["potential"]
         check = result.get("referenceCheck")
         document.text(f"Reference U/water {reference[0]:.3f} +- {reference[1]:.3f} kJ/mol (pooled 2 fs runs"
