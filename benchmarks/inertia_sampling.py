@@ -376,7 +376,7 @@ def perWallHour(entry):
     they are properties of the dynamics, which the step changes little there, and one run's estimate
     of tau_U scatters by a factor 2), and what an hour of wall time gives: simulated ps, effective
     samples of U (ps / 2 tau_U), rotational correlation times (ps / tau_1) and D t (1e-5 cm^2/s ps)."""
-    near = [p for p in entry["points"] if p["step"] <= entry["accurateStep"]]
+    near = [p for p in entry["points"] if p["step"] <= entry["accurateStep"]] or entry["points"][:1]
     D, tauRot, tauU = (float(np.mean([p[key] for p in near])) for key in ("D", "tauRot", "tauU"))
     ps = entry["nsPerDay"]*1000/24
     return dict(D=D, tauRot=tauRot, tauU=tauU, ps=ps, samples=ps/(2*tauU), rotations=ps/tauRot, diffusion=D*ps)
