@@ -34,6 +34,29 @@ Vector3 bodyAngularMomentum(const RigidBodySystem& system, int b, const Matrix3&
     return l;
 }
 
+/**
+ * The angular momentum l = sum_i m_i (A^T b_i) x (v_i - V) of body b's particle velocities about the
+ * body as it is fitted (attitude A, lab to body), with each arm A^T b_i put in arms if it is given.
+ */
+Vector3 particlesAngularMomentum(const RigidBodySystem& system, int b, const Matrix3& attitude, const vector<Vec3>& velocities,
+                                 const Vec3& velocity, Vector3* arms) {
+    const int n = system.getBodySize(b);
+    const int* members = system.getBodyParticles(b);
+    const vector<double>& masses = system.getMasses();
+    const Matrix3 rotation = transpose(attitude);
+    const Vector3* coordinates = system.getBodyCoordinates(b);
+    Vector3 angularMomentum = {0.0, 0.0, 0.0};
+    for (int i = 0; i < n; i++) {
+        const Vector3 arm = multiply(rotation, coordinates[i]);
+        if (arms != NULL)
+            arms[i] = arm;
+        Vector3 moment = cross(arm, toVector(velocities[members[i]] - velocity));
+        for (int k = 0; k < 3; k++)
+            angularMomentum[k] += masses[members[i]]*moment[k];
+    }
+    return angularMomentum;
+}
+
 } // namespace
 
 RigidBodyDynamics::RigidBodyDynamics(RigidBodySystem& system, HostThreads* threads, HostConstraints* constraints) :
@@ -141,22 +164,12 @@ void RigidBodyDynamics::projectBodyVelocities(int b, vector<Vec3>& velocities) {
     BodyState& state = states[b];
     const int n = system.getBodySize(b);
     const int* members = system.getBodyParticles(b);
-    const vector<double>& masses = system.getMasses();
     for (int i = 0; i < n; i++)
         system.requireFinite(velocities[members[i]], "velocity", members[i], b);
     const Vector3 velocity = system.centreOfMass(b, velocities);
     state.velocity = velocity;
-    const Matrix3 rotation = transpose(state.attitude);
-    const Vector3* coordinates = system.getBodyCoordinates(b);
-    Vector3 angularMomentum = {0.0, 0.0, 0.0};
     arms.resize(n);
-    for (int i = 0; i < n; i++) {
-        arms[i] = multiply(rotation, coordinates[i]);
-        Vector3 relative = toVector(velocities[members[i]] - toVec3(velocity));
-        Vector3 moment = cross(arms[i], relative);
-        for (int k = 0; k < 3; k++)
-            angularMomentum[k] += masses[members[i]]*moment[k];
-    }
+    const Vector3 angularMomentum = particlesAngularMomentum(system, b, state.attitude, velocities, toVec3(velocity), arms.data());
     state.angularMomentum = bodyAngularMomentum(system, b, state.attitude, angularMomentum);
     Vector3 omega = multiplyTransposed(state.attitude, bodyAngularVelocity(b, multiply(state.attitude, state.angularMomentum)));
     for (int i = 0; i < n; i++)
@@ -468,14 +481,7 @@ void RigidBodyDynamics::computeKineticEnergies(const vector<Vec3>& velocities, d
             // Raised moments: the energy of the Hamiltonian integrated, sum L_k^2 / (2 I'_k), with L
             // the body's momentum of the particles' rigid motion about the fitted body.
             const BodyState& state = states[b];
-            const Matrix3 rotation = transpose(state.attitude);
-            const Vector3* coordinates = system.getBodyCoordinates(b);
-            Vector3 angularMomentum = {0.0, 0.0, 0.0};
-            for (int i = 0; i < n; i++) {
-                Vector3 moment = cross(multiply(rotation, coordinates[i]), toVector(velocities[members[i]] - velocity));
-                for (int k = 0; k < 3; k++)
-                    angularMomentum[k] += masses[members[i]]*moment[k];
-            }
+            const Vector3 angularMomentum = particlesAngularMomentum(system, b, state.attitude, velocities, velocity, NULL);
             Vector3 bodyMomentum = multiply(state.attitude, bodyAngularMomentum(system, b, state.attitude, angularMomentum));
             rotational += rigidRotationalEnergy(system.getMoments(b), bodyMomentum.data());
         }
