@@ -455,8 +455,9 @@ void fitLine(const vector<double>& x, const vector<double>& y, double& slope, do
 /**
  * The drift of y against x from the means of `blocks` consecutive blocks: slope and standard error of
  * the line through the block means. Block means longer than the correlation time of the energy
- * fluctuations are nearly independent, so this error, unlike that of a fit to every sample, does not
- * understate the uncertainty of the slope.
+ * fluctuations are nearly independent, so this error understates the uncertainty of the slope less
+ * than that of a fit to every sample does; a wandering as slow as the whole run escapes it all the
+ * same (testWaterEnergy() says by how much).
  */
 void blockDrift(const vector<double>& x, const vector<double>& y, int blocks, double& slope, double& error) {
     int size = x.size()/blocks;

@@ -449,10 +449,17 @@ void testWaterEnergy(Platform& platform, bool fourSite, RigidBodyIntegrator::Rot
             1000*rigidError, " kJ/mol/ns (rms ", rigidRms, " kJ/mol), Verlet+SETTLE ", 1000*verletSlope, " +- ",
             1000*verletError, " kJ/mol/ns (rms ", verletRms, " kJ/mol), ", steps, " steps");
     std::cout << report << std::endl;
-    // No larger drift than Verlet within three combined standard errors (300 steps resolve only
-    // drifts of some hundred kJ/mol/ns, 2000 some tens); the fluctuation guard (at most 1.5 times Verlet's) catches
-    // gross errors such as a missing torque or virtual-site force.
-    check(fabs(rigidSlope) <= fabs(verletSlope) + 3*sqrt(rigidError*rigidError + verletError*verletError), report);
+    // No larger drift than Verlet within three combined standard errors; the fluctuation guard (at
+    // most 1.5 times Verlet's) catches gross errors such as a missing torque or virtual-site force.
+    // The block errors understate the uncertainty of a slope: the energy of these boxes wanders on the
+    // time scale of the whole run (a component that is there at 1 fs too, for both integrators), which
+    // no block within the run resolves. Measured on CPU, 10 runs of each configuration from their own
+    // equilibrations (2026-12-03): the slopes scattered 1.2 to 2.0 times (rigid) and 1.2 to 2.8 times
+    // (Verlet + SETTLE) their mean block errors, and TIP4P-Ew failed the check with the block errors
+    // taken as they are in 1 of 17 runs. So each error counts twice here (2000 steps then resolve drifts
+    // of about a hundred kJ/mol/ns, a quarter of kT per ns and degree of freedom; 300 steps some hundreds).
+    const double understated = 2.0;
+    check(fabs(rigidSlope) <= fabs(verletSlope) + 3*understated*sqrt(rigidError*rigidError + verletError*verletError), report);
     check(rigidRms <= 1.5*verletRms, report);
 }
 

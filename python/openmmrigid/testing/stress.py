@@ -350,8 +350,10 @@ def energy_drift(times, energies):
 def block_drift(times, energies, blocks):
     """The drift of energies against times from the means of `blocks` consecutive blocks: slope and
     standard error of the line through the block means. Block means are nearly independent when a
-    block is longer than the correlation time of the energy fluctuations, so this standard error,
-    unlike that of a fit to every sample, does not understate the uncertainty of the slope."""
+    block is longer than the correlation time of the energy fluctuations, so this standard error
+    understates the uncertainty of the slope less than that of a fit to every sample does; a
+    wandering as slow as the whole series escapes it all the same (in NVE water boxes of 64 molecules
+    over 4 ps, the slopes of independent runs scattered up to twice their block errors)."""
     n = len(times) // blocks * blocks
     blockTimes = np.asarray(times[:n], dtype=float).reshape(blocks, -1).mean(axis=1)
     blockEnergies = np.asarray(energies[:n], dtype=float).reshape(blocks, -1).mean(axis=1)
