@@ -21,7 +21,9 @@ hydrogenMass=3 amu, as benchmarks/nvt_accuracy.py). Equilibrium configurations: 
 `--equilibrate` ps), the same frames for every integrator. For each frame: velocities from
 Maxwell-Boltzmann, `--protocol` ps of the integrator (shadow work w_pi), velocities drawn again,
 `--protocol` ps more (w_omega); KL = (<w_pi> - <w_omega>)/2 in kT, +- the standard error of the
-paired differences. The cost: each integrator at each step timed side by side (interleaved blocks).
+paired differences. The cost: at each step, the integrators a user would run (no shadow work, no
+accuracy check; stock-middle as OpenMM's LangevinMiddleIntegrator) timed side by side (interleaved
+blocks, medians).
 An integrator that fails (NaN, an unstable drift) at a step is not run at larger ones. The rigid
 integrators' accuracy check is recorded (whether it fired) and its warning not shown.
 
@@ -31,12 +33,12 @@ integrators' accuracy check is recorded (whether it fired) and its warning not s
 Compare the ranking with the U-per-molecule reading of benchmarks/nvt_accuracy.py
 (docs/results/nvt_accuracy.md).
 
-Caveat: RigidBodyLangevinIntegrator and LangevinMiddleIntegrator hold velocities half a step behind
-the positions (LFMiddle), so their protocols start from canonical half-step velocities and sum the
-shadow work of LFMiddle's steps, which is BAOAB's up to the kinetic energies at the two ends of each
-half. Those end terms average out of the difference but not out of its variance (about dt F.v per
-degree of freedom): their error bars are several times those of openmmtools' VRORV (on-step
-velocities) at the same number of frames, and need correspondingly more frames.
+On-step velocities: RigidBodyLangevinIntegrator and LangevinMiddleIntegrator hold velocities half a
+step behind the positions (LFMiddle). Their step is BAOAB's with its closing half kick joined to the
+next step's opening one, so each protocol starts from canonical on-step velocities moved half a kick
+back, and its shadow work is corrected at both ends to BAOAB's (Runner.work): the same quantity that
+openmmtools' VRORV (BAOAB) measures. Without that correction (as in the first reduced run of
+2026-12-02) the end terms, of first order in the step, gave error bars 5 to 10 times VRORV's.
 """
 
 import argparse
@@ -96,6 +98,23 @@ def stockMiddle(stepPs):
     return integrator
 
 
+def timedIntegrator(kind, stepFs):
+    """The integrator a user would run, for the cost: no shadow work, no accuracy check; stock-middle
+    is OpenMM's LangevinMiddleIntegrator itself."""
+    stepPs = stepFs*1e-3
+    if kind.startswith("rigid"):
+        integrator = openmmrigid.RigidBodyLangevinIntegrator(TEMPERATURE, FRICTION, stepPs)
+        if kind == "rigid-nosquish":
+            integrator.setRotationMethod(openmmrigid.RigidBodyLangevinIntegrator.NoSquish)
+        integrator.setAccuracyCheck(False)
+        return integrator
+    if kind == "stock-middle":
+        return openmm.LangevinMiddleIntegrator(TEMPERATURE, FRICTION, stepPs)
+    from openmmtools.integrators import LangevinIntegrator
+    return LangevinIntegrator(temperature=TEMPERATURE*unit.kelvin, collision_rate=FRICTION/unit.picosecond,
+                              timestep=stepPs*unit.picosecond, splitting="V R O R V")
+
+
 class Runner:
     """One integrator at one step on one System: shadow work (kT) of `steps` steps from a state."""
 
@@ -121,15 +140,38 @@ class Runner:
         self.fired = False
         masses = np.array([system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles())])
         self.masses = np.where(masses > 0, masses, np.inf)  # a virtual site gets no velocity
+        self.halfStepBehind = kind != "openmmtools-vrorv"
+
+    def kinetic(self):
+        return self.context.getState(getEnergy=True).getKineticEnergy().value_in_unit(KJ)
+
+    def kick(self, time):
+        """The velocities kicked by the current forces for `time` ps, then projected (onto the
+        constraints; for the rigid integrators onto rigid motion, where a kick of each particle by its
+        force, projected, is the kick of each body's momentum and angular momentum by its force and
+        torque); returns the kinetic energy after it."""
+        state = self.context.getState(getVelocities=True, getForces=True)
+        velocities = state.getVelocities(asNumpy=True).value_in_unit(unit.nanometer/unit.picosecond)
+        forces = state.getForces(asNumpy=True).value_in_unit(KJ/unit.nanometer)
+        self.context.setVelocities(velocities + time*forces/self.masses[:, None])
+        self.context.applyVelocityConstraints(1e-10)
+        return self.kinetic()
 
     def work(self, positions, box, steps, velocitySeed):
-        """Set the state (positions, box, velocities drawn at 300 K), take `steps` steps, and return the
-        shadow work in kT; None if the run failed. The velocities are Maxwell-Boltzmann draws of every
-        particle's velocity, set as they are for every integrator (not setVelocitiesToTemperature,
-        which shifts LangevinMiddleIntegrator's and RigidBodyLangevinIntegrator's by half a kick): the
-        integrator's own velocity variable starts canonical. The rigid integrators project them onto
-        rigid motion, which for a whole redraw is a canonical draw of the bodies' momenta; the stock
-        constrained velocities are those the draw leaves after Context.applyVelocityConstraints."""
+        """Set the state (positions, box, on-step velocities drawn at 300 K), take `steps` steps, and
+        return the shadow work in kT of the protocol with on-step velocities at both ends (BAOAB's);
+        None if the run failed.
+
+        The on-step velocities v_0 are Maxwell-Boltzmann draws of every particle's velocity, projected
+        (Context.applyVelocityConstraints; the rigid integrators project onto rigid motion, which for a
+        whole redraw is a canonical draw of the bodies' momenta). For the LFMiddle integrators (the
+        rigid ones and stock-middle), whose velocity variable u is half a step behind, u_0 is v_0 less
+        half a kick; their step is BAOAB's with its closing half kick joined to the next opening one,
+        so their shadow work over the protocol, W (with the kinetic energies of u), is BAOAB's less
+        the ends: W_BAOAB = W + [K(u_T + kick) - K(u_T)] - [K(v_0) - K(u_0)]. Those end terms are of
+        first order in the step (dt/2 F.v per degree of freedom): left in, their spread would swamp
+        the divergence (their mean cancels between the two halves of a protocol, their variance does
+        not)."""
         context, integrator = self.context, self.integrator
         if positions is not None:
             context.setPeriodicBoxVectors(*box)
@@ -137,6 +179,11 @@ class Runner:
         rng = np.random.default_rng(velocitySeed)
         context.setVelocities(rng.standard_normal((len(self.masses), 3))*np.sqrt(KT/self.masses)[:, None])
         context.applyVelocityConstraints(1e-10)  # before the work is counted: the constraints' share is no step's
+        halfStep = 0.5*integrator.getStepSize().value_in_unit(unit.picosecond)
+        ends = 0.0
+        if self.halfStepBehind:
+            onStep = self.kinetic()
+            ends -= onStep - self.kick(-halfStep)
         try:
             if self.kind.startswith("rigid"):
                 integrator.resetShadowWork()
@@ -144,7 +191,7 @@ class Runner:
                     warnings.simplefilter("ignore", openmmrigid.AccuracyWarning)
                     integrator.step(steps)
                 self.fired = self.fired or bool(integrator.getAccuracyWarning())
-                work = integrator.getShadowWork().value_in_unit(KJ)/KT
+                work = integrator.getShadowWork().value_in_unit(KJ)
             elif self.kind == "stock-middle":
                 for name in ("work", "heat", "started"):
                     integrator.setGlobalVariableByName(name, 0.0)
@@ -153,13 +200,17 @@ class Runner:
                 # The last step's part: K + U now less K + U before it, less its heat.
                 last = (state.getKineticEnergy() + state.getPotentialEnergy()).value_in_unit(KJ) - \
                     integrator.getGlobalVariableByName("start") - integrator.getGlobalVariableByName("heat")
-                work = (integrator.getGlobalVariableByName("work") + last)/KT
+                work = integrator.getGlobalVariableByName("work") + last
             else:
                 integrator.reset_shadow_work()
                 integrator.step(steps)
-                work = integrator.get_shadow_work(dimensionless=True)
+                work = integrator.get_shadow_work(dimensionless=True)*KT
+            if self.halfStepBehind:
+                halfBehind = self.kinetic()
+                ends += self.kick(halfStep) - halfBehind
         except openmm.OpenMMException:
             return None
+        work = (work + ends)/KT
         return work if np.isfinite(work) else None
 
 
@@ -194,6 +245,7 @@ def main():
     parser.add_argument("--protocol", type=float, default=None, help="ps of each half of a protocol (default 2)")
     parser.add_argument("--molecules", type=int, default=None, help="waters (default 500; 216 with --quick)")
     parser.add_argument("--threads", type=int, default=1)
+    parser.add_argument("--timing-repetitions", type=int, default=5)
     args = parser.parse_args()
     quick = args.quick
     systems = args.systems or (["water"] if quick else ["water", "peptide"])
@@ -220,7 +272,7 @@ def main():
         topology, positions, system = makeSystem(systemName, molecules)
         stamp(f"{systemName}: {system.getNumParticles()} particles; equilibrium frames")
         frames = equilibriumFrames(system, positions, platform, properties, samples, args.spacing, args.equilibrate)
-        figureData = {}
+        figureData, results = {}, []
         for kind in kinds:
             for stepFs in steps:
                 runner = Runner(kind, stepFs, system, platform, properties, seed=11)
@@ -236,18 +288,43 @@ def main():
                     fromResampled.append(second)
                 if failed:
                     stamp(f"{systemName} {kind} {stepFs:g} fs: failed (unstable); larger steps not run")
-                    rows.append([systemName, kind, f"{stepFs:g}", "unstable", "", ""])
+                    results.append(dict(kind=kind, stepFs=stepFs))
                     break
                 kl, error = configurationKL(fromEquilibrium, fromResampled)
-                timing = benchmarking.timeInterleaved({kind: runner.integrator}, max(10, count//4), 3)[0][kind]
-                nsDay = benchmarking.nsPerDay(stepFs, float(np.median(timing)))
                 fired = ("yes" if runner.fired else "no") if kind.startswith("rigid") else ""
-                stamp(f"{systemName} {kind} {stepFs:g} fs: KL {kl:.4g} +- {error:.2g} kT, {nsDay:.2f} ns/day, check fired: {fired or '-'}")
-                rows.append([systemName, kind, f"{stepFs:g}", f"{kl:.4g} +- {error:.2g}", f"{nsDay:.2f}", fired])
-                csvRows.append(dict(system=systemName, integrator=kind, stepFs=stepFs, kl=float(kl), error=float(error),
-                                    nsPerDay=float(nsDay), checkFired=fired))
-                figureData.setdefault(kind, []).append((nsDay, kl, error, stepFs))
+                stamp(f"{systemName} {kind} {stepFs:g} fs: KL {kl:.4g} +- {error:.2g} kT, check fired: {fired or '-'}")
+                results.append(dict(kind=kind, stepFs=stepFs, kl=float(kl), error=float(error), fired=fired))
                 del runner
+        # The cost: at each step, every integrator that ran there, timed side by side (interleaved
+        # blocks, medians), from the first frame with velocities at 300 K.
+        nsDay = {}
+        for stepFs in steps:
+            kindsHere = [r["kind"] for r in results if r["stepFs"] == stepFs and "kl" in r]
+            if not kindsHere:
+                continue
+            integrators, contexts = {}, []
+            for kind in kindsHere:
+                integrators[kind] = timedIntegrator(kind, stepFs)
+                context = openmm.Context(system, integrators[kind], platform, properties)
+                context.setPeriodicBoxVectors(*frames[0][1])
+                context.setPositions(frames[0][0])
+                context.setVelocitiesToTemperature(TEMPERATURE*unit.kelvin, 3)
+                contexts.append(context)
+            wall = benchmarking.timeInterleaved(integrators, max(10, int(round(0.2/(stepFs*1e-3)))), args.timing_repetitions)[0]
+            for kind, seconds in wall.items():
+                nsDay[(kind, stepFs)] = benchmarking.nsPerDay(stepFs, float(np.median(seconds)))
+            stamp(f"{systemName} {stepFs:g} fs, ns/day side by side: " +
+                  ", ".join(f"{kind} {nsDay[(kind, stepFs)]:.2f}" for kind in kindsHere))
+            del integrators, contexts
+        for r in results:
+            if "kl" not in r:
+                rows.append([systemName, r["kind"], f"{r['stepFs']:g}", "unstable", "", ""])
+                continue
+            speed = nsDay[(r["kind"], r["stepFs"])]
+            rows.append([systemName, r["kind"], f"{r['stepFs']:g}", f"{r['kl']:.4g} +- {r['error']:.2g}", f"{speed:.2f}", r["fired"]])
+            csvRows.append(dict(system=systemName, integrator=r["kind"], stepFs=r["stepFs"], kl=r["kl"], error=r["error"],
+                                nsPerDay=float(speed), checkFired=r["fired"]))
+            figureData.setdefault(r["kind"], []).append((speed, r["kl"], r["error"], r["stepFs"]))
         if figureData:
             plt = benchmarking.pyplot()
             figure, axes = plt.subplots(figsize=(6, 4))
