@@ -7,7 +7,7 @@ estimator: openmmrigid.testing.samplingerror), plotted against ns/day.
 Integrators (friction 1/ps, 300 K):
 
 - rigid-exact, rigid-nosquish: RigidBodyLangevinIntegrator (Exact, NoSquish), shadow work from
-  setMeasureShadowWork();
+  setMeasureShadowWork(); rigid-raised: Exact with setMinimumMomentOfInertia(`--floor`);
 - stock-middle: LangevinMiddleIntegrator + SETTLE written as a CustomIntegrator (its step, as OpenMM's
   documentation writes it) that sums its shadow work: K + U before and after each step, less the
   kinetic energy its O stage adds;
@@ -58,6 +58,7 @@ KJ = unit.kilojoule_per_mole
 TEMPERATURE = 300.0
 FRICTION = 1.0
 KT = unit.MOLAR_GAS_CONSTANT_R.value_in_unit(KJ/unit.kelvin)*TEMPERATURE
+FLOOR = [0.08]  # rigid-raised's minimum moment of inertia (amu nm^2), set from --floor
 
 
 def makeSystem(name, molecules):
@@ -98,14 +99,21 @@ def stockMiddle(stepPs):
     return integrator
 
 
+def rigidIntegrator(kind, stepPs):
+    integrator = openmmrigid.RigidBodyLangevinIntegrator(TEMPERATURE, FRICTION, stepPs)
+    if kind == "rigid-nosquish":
+        integrator.setRotationMethod(openmmrigid.RigidBodyLangevinIntegrator.NoSquish)
+    if kind == "rigid-raised":
+        integrator.setMinimumMomentOfInertia(FLOOR[0])
+    return integrator
+
+
 def timedIntegrator(kind, stepFs):
     """The integrator a user would run, for the cost: no shadow work, no accuracy check; stock-middle
     is OpenMM's LangevinMiddleIntegrator itself."""
     stepPs = stepFs*1e-3
     if kind.startswith("rigid"):
-        integrator = openmmrigid.RigidBodyLangevinIntegrator(TEMPERATURE, FRICTION, stepPs)
-        if kind == "rigid-nosquish":
-            integrator.setRotationMethod(openmmrigid.RigidBodyLangevinIntegrator.NoSquish)
+        integrator = rigidIntegrator(kind, stepPs)
         integrator.setAccuracyCheck(False)
         return integrator
     if kind == "stock-middle":
@@ -122,9 +130,7 @@ class Runner:
         self.kind = kind
         stepPs = stepFs*1e-3
         if kind.startswith("rigid"):
-            self.integrator = openmmrigid.RigidBodyLangevinIntegrator(TEMPERATURE, FRICTION, stepPs)
-            if kind == "rigid-nosquish":
-                self.integrator.setRotationMethod(openmmrigid.RigidBodyLangevinIntegrator.NoSquish)
+            self.integrator = rigidIntegrator(kind, stepPs)
             self.integrator.setMeasureShadowWork(True)
             self.integrator.setRandomNumberSeed(seed)
         elif kind == "stock-middle":
@@ -162,13 +168,15 @@ class Runner:
         return the shadow work in kT of the protocol with on-step velocities at both ends (BAOAB's);
         None if the run failed.
 
-        The on-step velocities v_0 are Maxwell-Boltzmann draws of every particle's velocity, projected
-        (Context.applyVelocityConstraints; the rigid integrators project onto rigid motion, which for a
-        whole redraw is a canonical draw of the bodies' momenta). For the LFMiddle integrators (the
-        rigid ones and stock-middle), whose velocity variable u is half a step behind, u_0 is v_0 less
-        half a kick; their step is BAOAB's with its closing half kick joined to the next opening one,
-        so their shadow work over the protocol, W (with the kinetic energies of u), is BAOAB's less
-        the ends: W_BAOAB = W + [K(u_T + kick) - K(u_T)] - [K(v_0) - K(u_0)]. Those end terms are of
+        The on-step velocities v_0: for the rigid integrators, Context.setVelocitiesToTemperature()
+        (the bodies' momenta drawn for their own, possibly raised, moments, then taken half a kick
+        back), K(v_0) from getOnStepKineticEnergy(); otherwise Maxwell-Boltzmann draws of every
+        particle's velocity, projected (Context.applyVelocityConstraints), and for stock-middle taken
+        half a kick back here. For the LFMiddle integrators (the rigid ones and stock-middle), whose
+        velocity variable u is half a step behind, u_0 is v_0 less half a kick; their step is BAOAB's
+        with its closing half kick joined to the next opening one, so their shadow work over the
+        protocol, W (with the kinetic energies of u), is BAOAB's less the ends:
+        W_BAOAB = W + [K(u_T + kick) - K(u_T)] - [K(v_0) - K(u_0)]. Those end terms are of
         first order in the step (dt/2 F.v per degree of freedom): left in, their spread would swamp
         the divergence (their mean cancels between the two halves of a protocol, their variance does
         not)."""
@@ -176,14 +184,20 @@ class Runner:
         if positions is not None:
             context.setPeriodicBoxVectors(*box)
             context.setPositions(positions)
-        rng = np.random.default_rng(velocitySeed)
-        context.setVelocities(rng.standard_normal((len(self.masses), 3))*np.sqrt(KT/self.masses)[:, None])
-        context.applyVelocityConstraints(1e-10)  # before the work is counted: the constraints' share is no step's
         halfStep = 0.5*integrator.getStepSize().value_in_unit(unit.picosecond)
         ends = 0.0
-        if self.halfStepBehind:
-            onStep = self.kinetic()
-            ends -= onStep - self.kick(-halfStep)
+        if self.kind.startswith("rigid"):
+            # Drawn on step for the bodies' own (possibly raised) moments and taken half a kick back by
+            # the integrator (Context.setVelocitiesToTemperature()); getOnStepKineticEnergy() kicks forward.
+            context.setVelocitiesToTemperature(TEMPERATURE*unit.kelvin, velocitySeed)
+            ends -= integrator.getOnStepKineticEnergy().value_in_unit(KJ) - self.kinetic()
+        else:
+            rng = np.random.default_rng(velocitySeed)
+            context.setVelocities(rng.standard_normal((len(self.masses), 3))*np.sqrt(KT/self.masses)[:, None])
+            context.applyVelocityConstraints(1e-10)  # before the work is counted: the constraints' share is no step's
+            if self.halfStepBehind:
+                onStep = self.kinetic()
+                ends -= onStep - self.kick(-halfStep)
         try:
             if self.kind.startswith("rigid"):
                 integrator.resetShadowWork()
@@ -205,7 +219,9 @@ class Runner:
                 integrator.reset_shadow_work()
                 integrator.step(steps)
                 work = integrator.get_shadow_work(dimensionless=True)*KT
-            if self.halfStepBehind:
+            if self.kind.startswith("rigid"):
+                ends += integrator.getOnStepKineticEnergy().value_in_unit(KJ) - self.kinetic()
+            elif self.halfStepBehind:
                 halfBehind = self.kinetic()
                 ends += self.kick(halfStep) - halfBehind
         except openmm.OpenMMException:
@@ -237,7 +253,8 @@ def main():
     parser.add_argument("--quick", action="store_true", help="216 waters, steps 2 6 10 fs, 3 frames, 0.2 ps protocols")
     parser.add_argument("--systems", nargs="+", default=None, choices=["water", "peptide"])
     parser.add_argument("--integrators", nargs="+", default=None,
-                        choices=["rigid-exact", "rigid-nosquish", "stock-middle", "openmmtools-vrorv"])
+                        choices=["rigid-exact", "rigid-nosquish", "rigid-raised", "stock-middle", "openmmtools-vrorv"])
+    parser.add_argument("--floor", type=float, default=0.08, help="rigid-raised's minimum moment (amu nm^2; default 0.08)")
     parser.add_argument("--steps", nargs="+", type=float, default=None, help="steps in fs (default 1 2 4 6 8 10)")
     parser.add_argument("--samples", type=int, default=None, help="equilibrium frames (default 50)")
     parser.add_argument("--spacing", type=float, default=2.0, help="ps between frames (default 2)")
@@ -255,6 +272,7 @@ def main():
     molecules = args.molecules or (216 if quick else 500)
     if quick:
         args.spacing, args.equilibrate = 0.5, 1.0
+    FLOOR[0] = args.floor
     kinds = args.integrators or ["rigid-exact", "rigid-nosquish", "stock-middle", "openmmtools-vrorv"]
     if "openmmtools-vrorv" in kinds:
         try:

@@ -370,6 +370,12 @@ protected:
      * forces at the new positions.
      */
     virtual void executeStep(OpenMM::ContextImpl& context) = 0;
+    /**
+     * The kinetic energy the momenta would have after a kick of `kick` (ps) by the current forces,
+     * leaving the state as it is (IntegrateRigidBodyStepKernel::computeKickedKineticEnergies()): the
+     * bodies and forces made current first, as a step makes them. Throws unless bound, naming `method`.
+     */
+    double computeKickedKineticEnergy(double kick, const std::string& method);
     /** The kernel, once the integrator is bound to a Context (throws otherwise). */
     IntegrateRigidBodyStepKernel& getKernel() const;
     /** The body topology, once the integrator is bound to a Context (throws otherwise). */
@@ -388,6 +394,13 @@ private:
     void projectBodies();
     /** Apply the kick getLoadedVelocityKick() asked for after a checkpoint, if any (the bodies must be projected). */
     void applyLoadedVelocityKick();
+    /**
+     * What a step takes from before it, proven current or rebuilt: the bodies fitted again if the
+     * positions are not those the kernel last wrote (or a notice came), and whether the forces the
+     * Context holds are this integrator's at these positions and this box (returned), box set to the
+     * box now.
+     */
+    bool makeBodiesCurrent(OpenMM::Vec3* box);
     std::string className;
     std::vector<std::vector<int> > bodies;
     bool explicitBodies;

@@ -90,6 +90,15 @@ public:
      * free particles) and rotation (about the centres of mass).
      */
     virtual void computeKineticEnergies(OpenMM::ContextImpl& context, double& translational, double& rotational) = 0;
+    /**
+     * The kinetic energy, split as computeKineticEnergies() splits it, that the momenta would have
+     * after a kick of `kick` by the forces the Context holds (each body's momentum by its force and its
+     * angular momentum by its torque; the free particles' velocities by their forces, then projected
+     * onto the constraints among them to constraintTolerance), leaving the state as it is. The
+     * bodies' momenta are those of the kernel's states: current after a step or a projection.
+     */
+    virtual void computeKickedKineticEnergies(OpenMM::ContextImpl& context, double kick, double constraintTolerance,
+                                              double& translational, double& rotational) = 0;
     /** The kinetic energy sum m v^2 / 2 over the massive particles. */
     virtual double computeKineticEnergy(OpenMM::ContextImpl& context) = 0;
     /**

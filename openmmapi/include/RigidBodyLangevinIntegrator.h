@@ -149,6 +149,28 @@ public:
     double getVelocityTimeOffset() const {
         return 0.5*getStepSize();
     }
+    /**
+     * Get the kinetic energy of the on-step velocities: the momenta the Context holds (half a step
+     * behind the positions) kicked by half a step of the forces at the positions now, each body's
+     * momentum by its force and its angular momentum by its torque (in its own, possibly raised,
+     * moments), the free particles' velocities by their forces and then projected onto the
+     * constraints among them. These are the velocities BAOAB holds between its steps (the step is
+     * BAOAB's with its closing half kick joined to the next step's opening one), so
+     *
+     *     W_BAOAB = W + [K_on - K](end) - [K_on - K](start),
+     *
+     * with W the shadow work (getShadowWork()) and K the Context's kinetic energy, is the shadow work
+     * of the same trajectory with on-step velocities at both ends: BAOAB's, whose ends are free of
+     * the terms of first order in the step (dt F.v / 2 per degree of freedom) that W's half-step ends
+     * carry. That is what the near-equilibrium estimate of the configuration-space error needs
+     * (benchmarks/sampling_error.py). The state is left as it is. Only available once the integrator
+     * is bound to a Context.
+     *
+     * @return the kinetic energy, measured in kJ/mol
+     */
+    double getOnStepKineticEnergy() {
+        return computeKickedKineticEnergy(getVelocityTimeOffset(), "getOnStepKineticEnergy");
+    }
 protected:
     int getRequestedSeed() const {
         return randomNumberSeed;

@@ -490,6 +490,41 @@ void RigidBodyDynamics::computeKineticEnergies(const vector<Vec3>& velocities, d
         translational += 0.5*masses[p]*velocities[p].dot(velocities[p]);
 }
 
+void RigidBodyDynamics::computeKickedKineticEnergies(const vector<Vec3>& positions, const vector<Vec3>& velocities,
+                                                     const vector<Vec3>& forces, double kick, double constraintTolerance,
+                                                     double& translational, double& rotational) {
+    requireConstraints();
+    translational = 0.0;
+    rotational = 0.0;
+    for (int b = 0; b < system.getNumBodies(); b++) {
+        const BodyState& state = states[b];
+        Vec3 force, torque;
+        forceAndTorque(b, positions, forces, force, torque);
+        const double mass = system.getBodyMass(b);
+        Vector3 angularMomentum;
+        Vec3 velocity;
+        for (int k = 0; k < 3; k++) {
+            velocity[k] = state.velocity[k] + kick*force[k]/mass;
+            angularMomentum[k] = state.angularMomentum[k] + kick*torque[k];
+        }
+        translational += 0.5*mass*velocity.dot(velocity);
+        rotational += rigidRotationalEnergy(system.getMoments(b), multiply(state.attitude, angularMomentum).data());
+    }
+    const vector<int>& free = system.getFreeParticles();
+    if (free.empty())
+        return;
+    vector<Vec3> kicked = velocities;
+    for (int p : free)
+        kicked[p] += forces[p]*(kick*inverseMasses[p]);
+    if (constraints) {
+        vector<Vec3> where = positions;
+        constraints->applyToVelocities(where, kicked, inverseMasses, constraintTolerance);
+    }
+    const vector<double>& masses = system.getMasses();
+    for (int p : free)
+        translational += 0.5*masses[p]*kicked[p].dot(kicked[p]);
+}
+
 double RigidBodyDynamics::computeKineticEnergy(const vector<Vec3>& velocities) const {
     if (system.hasRaisedMoments()) {
         double translational, rotational;

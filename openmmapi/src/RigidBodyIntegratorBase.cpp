@@ -507,6 +507,41 @@ void RigidBodyIntegratorBase::loadCheckpoint(istream& stream) {
     forcesAreValid = false;
 }
 
+bool RigidBodyIntegratorBase::makeBodiesCurrent(Vec3* box) {
+    if (!needsProjection && !getKernel().positionsAreCurrent(*context))
+        needsProjection = true;  // moved without a notice: a CompoundIntegrator's other integrator, the minimizer
+    if (needsProjection) {
+        projectBodies();
+        needsProjection = false;
+        forcesAreValid = false;
+        applyLoadedVelocityKick();
+    }
+    // A new box (setPeriodicBoxVectors() between steps, without new positions) sends no notice.
+    context->getPeriodicBoxVectors(box[0], box[1], box[2]);
+    if (box[0] != forcesBox[0] || box[1] != forcesBox[1] || box[2] != forcesBox[2])
+        forcesAreValid = false;
+    // A getState() of other force groups overwrites the forces.
+    if (context->getLastForceGroups() != getIntegrationForceGroups())
+        forcesAreValid = false;
+    return forcesAreValid;
+}
+
+double RigidBodyIntegratorBase::computeKickedKineticEnergy(double kick, const string& method) {
+    if (!bound)
+        throw OpenMMException(className + "." + method + ": the integrator is not bound to a Context");
+    Vec3 box[3];
+    if (!makeBodiesCurrent(box)) {
+        context->calcForcesAndEnergy(true, false, getIntegrationForceGroups());
+        stepState.potentialKnown = false;
+        forcesAreValid = true;
+        for (int k = 0; k < 3; k++)
+            forcesBox[k] = box[k];
+    }
+    double translational, rotational;
+    getKernel().computeKickedKineticEnergies(*context, kick, getConstraintTolerance(), translational, rotational);
+    return translational + rotational;
+}
+
 void RigidBodyIntegratorBase::step(int steps) {
     if (!bound)
         throw OpenMMException("This Integrator is not bound to a context!");
@@ -522,19 +557,8 @@ void RigidBodyIntegratorBase::step(int steps) {
             forcesAreValid = false;
             needsProjection = true;
         }
-        if (!needsProjection && !stepKernel.positionsAreCurrent(*context))
-            needsProjection = true;  // moved without a notice: a CompoundIntegrator's other integrator, the minimizer
-        if (needsProjection) {
-            projectBodies();
-            needsProjection = false;
-            forcesAreValid = false;
-            applyLoadedVelocityKick();
-        }
-        // A new box (setPeriodicBoxVectors() between steps, without new positions) sends no notice.
         Vec3 box[3];
-        context->getPeriodicBoxVectors(box[0], box[1], box[2]);
-        if (box[0] != forcesBox[0] || box[1] != forcesBox[1] || box[2] != forcesBox[2])
-            forcesAreValid = false;
+        makeBodiesCurrent(box);
         // Shadow work needs the potential energy the step starts from: the last step's, or evaluated here.
         // The accuracy check measures in episodes (internal/AccuracyCheck.h).
         AccuracyCheck::Setting setting;
@@ -545,7 +569,7 @@ void RigidBodyIntegratorBase::step(int steps) {
         else
             checkingStep = false;
         const bool measure = measuresShadowWork();
-        if (!forcesAreValid || context->getLastForceGroups() != getIntegrationForceGroups() || (measure && !stepState.potentialKnown)) {
+        if (!forcesAreValid || (measure && !stepState.potentialKnown)) {
             stepState.potentialEnergy = context->calcForcesAndEnergy(true, measure, getIntegrationForceGroups());
             stepState.potentialKnown = measure;
         }

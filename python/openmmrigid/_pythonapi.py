@@ -58,6 +58,7 @@ QUANTITY_RESULTS = {
     ("RigidBodyLangevinIntegrator", "getTemperature"): unit.kelvin,
     ("RigidBodyLangevinIntegrator", "getFriction"): unit.picosecond**-1,
     ("RigidBodyLangevinIntegrator", "getVelocityTimeOffset"): unit.picosecond,
+    ("RigidBodyLangevinIntegrator", "getOnStepKineticEnergy"): unit.kilojoule_per_mole,
 }
 
 QUANTITY = "openmm.unit.Quantity"

@@ -166,6 +166,15 @@ public:
      * particles, and the rest of the bodies' kinetic energy (their rotation, for rigid velocities).
      */
     void computeKineticEnergies(const std::vector<OpenMM::Vec3>& velocities, double& translational, double& rotational) const;
+    /**
+     * Split as computeKineticEnergies() splits it: the kinetic energy the momenta would have after a
+     * kick of `kick` by the forces, each body's from its state (V + kick F/M, and L + kick tau in its
+     * own moments: the energy of the Hamiltonian integrated), the free particles' from their
+     * velocities kicked and projected onto the constraints among them. Changes no state.
+     */
+    void computeKickedKineticEnergies(const std::vector<OpenMM::Vec3>& positions, const std::vector<OpenMM::Vec3>& velocities,
+                                      const std::vector<OpenMM::Vec3>& forces, double kick, double constraintTolerance,
+                                      double& translational, double& rotational);
     /** The kinetic energy sum m v^2 / 2 over every particle. */
     double computeKineticEnergy(const std::vector<OpenMM::Vec3>& velocities) const;
     /** The number of doubles of one body's state in getStates(). */

@@ -47,6 +47,8 @@ public:
     void writeBodyVelocities(OpenMM::ContextImpl& context) override;
     void scaleMomenta(OpenMM::ContextImpl& context, double alpha) override;
     void computeKineticEnergies(OpenMM::ContextImpl& context, double& translational, double& rotational) override;
+    void computeKickedKineticEnergies(OpenMM::ContextImpl& context, double kick, double constraintTolerance, double& translational,
+                                      double& rotational) override;
     double computeKineticEnergy(OpenMM::ContextImpl& context) override;
     void beforeLastForces(OpenMM::ContextImpl& context) override;
     void finishStep(OpenMM::ContextImpl& context, double dt) override;

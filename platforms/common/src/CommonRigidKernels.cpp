@@ -132,7 +132,9 @@ struct CommonIntegrateRigidBodyStepKernel::Impl {
     ComputeArray startStates, startPosq, startPosqCorrection, startVelm;
     ComputeKernel updateAtomOrder, recordVelocities, kickDrift, kickDriftFree, finishFreeDrift, closingKick, kickFree;
     ComputeKernel thermalizeBodies, thermalizeFree, scaleBodies, scaleFree, kineticEnergies, sumPairs, fitTranslation;
-    ComputeKernel projectBodyVelocities;
+    ComputeKernel projectBodyVelocities, kickedKineticEnergies;
+    /** The velocities while computeKickedKineticEnergies() kicks the free particles' (allocated on first use). */
+    ComputeArray savedVelm;
     /**
      * The failure flags of the device projections: [0] set by rigidFitTranslation for a body that did
      * not move as one translation (rigidProjectVelocities then does nothing), [1] by
@@ -524,6 +526,16 @@ void CommonIntegrateRigidBodyStepKernel::initialize(ContextImpl& context, RigidB
                                   &velm, &d.energies, &d.bodyCoordinates, &d.shapes, &d.inertiaScale, &d.states})
         d.kineticEnergies->addArg(*array);
 
+    d.kickedKineticEnergies = program->createKernel("rigidKickedKineticEnergies");
+    d.kickedKineticEnergies->addArg(d.numBodies);
+    d.kickedKineticEnergies->addArg(d.numFree);
+    for (ArrayInterface* array : initializer_list<ArrayInterface*>{&d.bodyStart, &d.bodyParticles, &d.bodyCoordinates, &d.bodyMass,
+                                  &d.shapes, &d.freeParticles, &d.currentIndex, &d.states, &velm, &force})
+        d.kickedKineticEnergies->addArg(*array);
+    d.kickedKineticEnergies->addArg(padded);
+    d.kickedKineticEnergies->addArg(d.energies);
+    d.kickedKineticEnergies->addArg();  // kick (14)
+
     d.sumPairs = program->createKernel("rigidSumPairs");
     d.sumPairs->addArg(d.numBodies + d.numFree);
     d.sumPairs->addArg(d.energies);
@@ -785,6 +797,34 @@ void CommonIntegrateRigidBodyStepKernel::computeKineticEnergies(ContextImpl& con
         return;
     d.kineticEnergies->execute(d.numBodies + d.numFree);
     d.sumPairs->execute(sumThreads, sumThreads);
+    vector<double> sums;
+    d.sums.download(sums);
+    translational = sums[0];
+    rotational = sums[1];
+}
+
+void CommonIntegrateRigidBodyStepKernel::computeKickedKineticEnergies(ContextImpl& context, double kick, double constraintTolerance,
+                                                                      double& translational, double& rotational) {
+    Impl& d = *impl;
+    ContextSelector selector(cc);
+    translational = rotational = 0.0;
+    if (d.numBodies + d.numFree == 0)
+        return;
+    if (d.numFree > 0) {
+        // The free particles' velocities kicked and projected in place, and put back afterwards.
+        if (!d.savedVelm.isInitialized())
+            d.savedVelm.initialize(cc, cc.getVelm().getSize(), cc.getVelm().getElementSize(), "rigidSavedVelm");
+        cc.getVelm().copyTo(d.savedVelm);
+        d.kickFree->setArg(6, kick);
+        d.kickFree->execute(d.numFree);
+        if (d.solver)
+            d.solver->applyVelocityConstraints(constraintTolerance);
+    }
+    d.kickedKineticEnergies->setArg(14, kick);
+    d.kickedKineticEnergies->execute(d.numBodies + d.numFree);
+    d.sumPairs->execute(sumThreads, sumThreads);
+    if (d.numFree > 0)
+        d.savedVelm.copyTo(cc.getVelm());
     vector<double> sums;
     d.sums.download(sums);
     translational = sums[0];

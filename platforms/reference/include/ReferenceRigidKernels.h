@@ -34,6 +34,8 @@ public:
     void writeBodyVelocities(OpenMM::ContextImpl& context);
     void scaleMomenta(OpenMM::ContextImpl& context, double alpha);
     void computeKineticEnergies(OpenMM::ContextImpl& context, double& translational, double& rotational);
+    void computeKickedKineticEnergies(OpenMM::ContextImpl& context, double kick, double constraintTolerance, double& translational,
+                                      double& rotational);
     double computeKineticEnergy(OpenMM::ContextImpl& context);
     void finishStep(OpenMM::ContextImpl& context, double dt);
 private:

@@ -136,6 +136,12 @@ void ReferenceIntegrateRigidBodyStepKernel::computeKineticEnergies(ContextImpl& 
     dynamics->computeKineticEnergies(extractVelocities(context), translational, rotational);
 }
 
+void ReferenceIntegrateRigidBodyStepKernel::computeKickedKineticEnergies(ContextImpl& context, double kick, double constraintTolerance,
+                                                                         double& translational, double& rotational) {
+    dynamics->computeKickedKineticEnergies(extractPositions(context), extractVelocities(context), extractForces(context), kick,
+                                           constraintTolerance, translational, rotational);
+}
+
 double ReferenceIntegrateRigidBodyStepKernel::computeKineticEnergy(ContextImpl& context) {
     return dynamics->computeKineticEnergy(extractVelocities(context));
 }

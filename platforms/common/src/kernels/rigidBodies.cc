@@ -583,6 +583,45 @@ KERNEL void rigidKineticEnergies(int numBodies, int numFree, GLOBAL const int* R
     }
 }
 
+/*
+ * RigidBodyDynamics::computeKickedKineticEnergies, per body and per free particle (as
+ * rigidKineticEnergies lays them out): each body's energy after a kick of its state's momenta by its
+ * force and torque, in its own moments; each free particle's from velm, which the host has kicked
+ * and projected onto the constraints.
+ */
+KERNEL void rigidKickedKineticEnergies(int numBodies, int numFree, GLOBAL const int* RESTRICT bodyStart,
+        GLOBAL const int* RESTRICT bodyParticles, GLOBAL const double* RESTRICT bodyCoordinates, GLOBAL const double* RESTRICT bodyMass,
+        GLOBAL const RigidShape* RESTRICT shapes, GLOBAL const int* RESTRICT freeParticles, GLOBAL const int* RESTRICT currentIndex,
+        GLOBAL const double* RESTRICT states, GLOBAL const mixed4* RESTRICT velm, GLOBAL const mm_long* RESTRICT force,
+        int paddedNumAtoms, GLOBAL double* RESTRICT energies, double kick) {
+    for (int j = GLOBAL_ID; j < numBodies + numFree; j += GLOBAL_SIZE) {
+        double v[3];
+        int k;
+        if (j < numBodies) {
+            RigidBodyState s;
+            RigidShape shape = shapes[j];
+            double total[3], torque[3], l[3], bodyL[3];
+            rigidLoadState(states, j, &s);
+            rigidForceAndTorque(&s, bodyCoordinates, bodyParticles, currentIndex, bodyStart[j], bodyStart[j + 1], force, paddedNumAtoms,
+                    total, torque);
+            const double mass = bodyMass[j];
+            for (k = 0; k < 3; k++) {
+                v[k] = s.v[k] + kick*total[k]/mass;
+                l[k] = s.l[k] + kick*torque[k];
+            }
+            rigidMultiplyVector(s.a, l, bodyL);
+            energies[2*j] = 0.5*mass*(v[0]*v[0] + v[1]*v[1] + v[2]*v[2]);
+            energies[2*j + 1] = rigidRotationalEnergy(shape.moments, bodyL);
+        }
+        else {
+            const int index = currentIndex[freeParticles[j - numBodies]];
+            rigidReadVelocity(velm, index, v);
+            energies[2*j] = 0.5*(v[0]*v[0] + v[1]*v[1] + v[2]*v[2])/velm[index].w;
+            energies[2*j + 1] = 0.0;
+        }
+    }
+}
+
 /* sums[0] = sum of values[2 j], sums[1] = sum of values[2 j + 1]: one work group of RIGID_SUM_THREADS threads. */
 KERNEL void rigidSumPairs(int count, GLOBAL const double* RESTRICT values, GLOBAL double* RESTRICT sums) {
     LOCAL double first[RIGID_SUM_THREADS];
