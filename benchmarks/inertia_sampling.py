@@ -269,6 +269,8 @@ def runSystem(name, args, platform, properties):
                   provenance=header(platform.getName(), args.threads or None),
                   configs={label: list(config) for label, config in configs.items()}, tolerance=args.tolerance)
     analyse(result)
+    # Saved before the timing, so that a failure there loses no sampling (--report re-reads it).
+    (args.folder/f"{name}.json").write_text(json.dumps(result, indent=1))
     stamp(f"{name}: accurate steps " + ", ".join(f"{label} {entry['accurateStep']}" for label, entry in result["summary"].items())
           + "; timing")
     timing(result, system, heavy, state, configs, platform, properties, args)
@@ -367,6 +369,10 @@ def timing(result, system, heavy, state, configs, platform, properties, args):
         integrator = makeIntegrator(config, step, 5)
         context = openmm.Context(heavy if config[2] else system, integrator, platform, properties)
         context.setState(state)
+        # Velocities for this configuration's masses and moments, as in its runs: the start's, drawn
+        # for the particles' own, would give raised moments a rotation I'/I times too hot, which a
+        # step near the largest stable one does not survive.
+        context.setVelocitiesToTemperature(TEMPERATURE, 5)
         integrators[(label, step)] = integrator
         contexts.append(context)
     wall, _ = timeInterleaved(integrators, args.timing_steps, args.timing_repetitions)
@@ -507,7 +513,7 @@ def main():
     if args.quick:
         args.starts, args.time, args.discard, args.equilibrate = 1, 2.0, 0.5, 2.0
         args.timing_steps, args.timing_repetitions = 10, 3
-    folder = RESULTS/("quick" if args.quick else "full")
+    folder = args.folder = RESULTS/("quick" if args.quick else "full")
     folder.mkdir(parents=True, exist_ok=True)
     if not args.report:
         openLog(folder/"log.txt")
