@@ -374,8 +374,17 @@ protected:
     IntegrateRigidBodyStepKernel& getKernel() const;
     /** The body topology, once the integrator is bound to a Context (throws otherwise). */
     const RigidBodySystem& getTopology() const;
-    /** What the step sequence keeps between steps (random numbers, thermostat work). */
-    StepState stepState;
+    /**
+     * Add the thermostat's work the kernel has accumulated since it was last taken (rescaleMomenta()
+     * on the device) to stepState.thermostatWork, if hasThermostatWork(): before the work is read or
+     * saved. On a GPU this waits for the device (unless no step has rescaled since).
+     */
+    void takeThermostatWork() const;
+    /**
+     * What the step sequence keeps between steps (random numbers, thermostat work). Mutable so that
+     * the const createCheckpoint() can take the kernel's pending thermostat work into it.
+     */
+    mutable StepState stepState;
 private:
     /** Body b, with its shape (an OpenMMException if it is an explicit body whose positions were never set). */
     const RigidBodySystem& getShapedBody(int b) const;

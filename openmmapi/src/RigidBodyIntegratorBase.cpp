@@ -440,6 +440,7 @@ void RigidBodyIntegratorBase::createCheckpoint(ostream& stream) const {
     int32_t length = className.size();
     stream.write((const char*) &length, sizeof(length));
     stream.write(className.data(), length);
+    takeThermostatWork();
     stream.write((const char*) &stepState.seed, sizeof(stepState.seed));
     stream.write((const char*) &stepState.randomCounter, sizeof(stepState.randomCounter));
     if (hasThermostatWork())
@@ -479,8 +480,10 @@ void RigidBodyIntegratorBase::loadCheckpoint(istream& stream) {
     // Before headers the integrator's data ended the checkpoint: one that ends here was written before
     // the integrator had random numbers (a RigidBodyIntegrator without a thermostat), and means "none
     // drawn yet".
-    if (version == 0 && stream.peek() == char_traits<char>::eof())
+    if (version == 0 && stream.peek() == char_traits<char>::eof()) {
         stream.clear();
+        takeThermostatWork();  // the step state stays, with all its work
+    }
     else {
         StepState saved;
         stream.read((char*) &saved.seed, sizeof(saved.seed));
@@ -500,11 +503,18 @@ void RigidBodyIntegratorBase::loadCheckpoint(istream& stream) {
                 throw OpenMMException(className + ": the checkpoint ends within the integrator's shadow work and heat");
         }
         stepState = saved;
+        // The work the kernel accumulated since it was last taken belongs to the state replaced: dropped.
+        getKernel().takeThermostatWork(*context);
     }
     loadedVelocityKick = getLoadedVelocityKick(version);
     accuracyMonitor.stateSet();
     needsProjection = true;
     forcesAreValid = false;
+}
+
+void RigidBodyIntegratorBase::takeThermostatWork() const {
+    if (hasThermostatWork())
+        stepState.thermostatWork += getKernel().takeThermostatWork(*context);
 }
 
 void RigidBodyIntegratorBase::step(int steps) {
