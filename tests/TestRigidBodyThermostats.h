@@ -628,7 +628,7 @@ double scaledDifference(const vector<Vec3>& a, double alpha, const vector<Vec3>&
  * with the step's deviates (stream 0 of the seed, counter n at step n); the work, read once at the
  * end, and the heat are the sum of K' - K. On Reference bit for bit (the values of the host
  * computation this plugin had before the factor moved to the device); elsewhere to rounding (the
- * factor computed on the device, 1e-13).
+ * factor computed on the device, 1e-13). Then the heat counts only the steps that measured it.
  */
 void testThermostatStepsFollowEquationA7(Platform& platform) {
     System system;
@@ -675,6 +675,28 @@ void testThermostatStepsFollowEquationA7(Platform& platform) {
     check(exact ? measured == work && heat == work : fabs(measured - work) < 1e-12*fabs(work) && fabs(heat - work) < 1e-12*fabs(work),
           report);
     check(fabs(work) > 1.0, report);  // the run does exchange energy with the bath
+    // The heat is the work of the steps that measured it: 10 steps without, 10 with. Each part of
+    // the work is summed from 0 by the kernel and added when the host takes it (at the switch and
+    // at the read).
+    integrator.setMeasureHeat(false);
+    double parts[2] = {0.0, 0.0};
+    for (int n = 40; n < 60; n++) {
+        if (n == 50)
+            integrator.setMeasureHeat(true);
+        const double kinetic = integrator.getTranslationalKineticEnergy() + integrator.getRotationalKineticEnergy();
+        NormalStream random(29, 0, n);
+        double newKinetic;
+        transcribedBussiFactor(kinetic, target, dof, c, random, newKinetic);
+        parts[n < 50 ? 0 : 1] += newKinetic - kinetic;
+        integrator.step(1);
+    }
+    const double lastHeat = integrator.getHeat(), lastWork = integrator.getThermostatWork();
+    const double expectedHeat = heat + parts[1], expectedWork = (measured + parts[0]) + parts[1];
+    report = message("thermostat: heat ", lastHeat, " kJ/mol (expected ", expectedHeat, "), work ", lastWork, " (expected ",
+                     expectedWork, ") after 10 steps without and 10 with the heat measured");
+    check(exact ? lastHeat == expectedHeat && lastWork == expectedWork
+                : fabs(lastHeat - expectedHeat) < 1e-12*fabs(work) && fabs(lastWork - expectedWork) < 1e-12*fabs(work), report);
+    check(fabs(parts[0]) > 1e-3 && fabs(parts[1]) > 1e-3, report);
 }
 
 /**

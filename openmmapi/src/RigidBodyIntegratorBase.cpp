@@ -264,10 +264,18 @@ double RigidBodyIntegratorBase::getShadowWork() const {
     return stepState.shadowWork;
 }
 
+void RigidBodyIntegratorBase::setMeasureHeat(bool measure) {
+    // The work the kernel holds is heat or not as the steps that did it measured it.
+    if (bound && measure != measureHeat)
+        takeThermostatWork();
+    measureHeat = measure;
+}
+
 double RigidBodyIntegratorBase::getHeat() const {
     getKernel();  // throws unless bound
     if (!measureHeat)
         throw OpenMMException(className + ".getHeat: the heat is not measured; call setMeasureHeat(True) before the steps");
+    takeThermostatWork();
     return stepState.heat;
 }
 
@@ -304,6 +312,7 @@ void RigidBodyIntegratorBase::resetShadowWork() {
 
 void RigidBodyIntegratorBase::resetHeat() {
     getKernel();  // throws unless bound
+    takeThermostatWork();
     stepState.heat = 0.0;
 }
 
@@ -513,8 +522,13 @@ void RigidBodyIntegratorBase::loadCheckpoint(istream& stream) {
 }
 
 void RigidBodyIntegratorBase::takeThermostatWork() const {
-    if (hasThermostatWork())
-        stepState.thermostatWork += getKernel().takeThermostatWork(*context);
+    if (!hasThermostatWork())
+        return;
+    const double work = getKernel().takeThermostatWork(*context);
+    stepState.thermostatWork += work;
+    // The heat of RigidBodyIntegrator is its thermostat's work over the steps that measured it.
+    if (measureHeat)
+        stepState.heat += work;
 }
 
 void RigidBodyIntegratorBase::step(int steps) {

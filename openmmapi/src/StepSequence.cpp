@@ -108,19 +108,18 @@ void stepRigidBodyIntegrator(ContextImpl& context, IntegrateRigidBodyStepKernel&
         // factor for every momentum, from the exact solution over this step of the stochastic
         // equation for the kinetic energy. Its deviates do not depend on the kinetic energy: drawn
         // here, they go to the kernel, which sums K, takes the factor and scales where the momenta
-        // are (on a GPU without the host reading anything) and accumulates the work K' - K.
+        // are (on a GPU without the host reading anything) and accumulates the work K' - K, which
+        // is also the heat (RigidBodyIntegratorBase::takeThermostatWork()).
         const int dof = bodies.getNumDegreesOfFreedom();
         const double c = exp(-dt/integrator.getThermostatCollisionTime());
         NormalStream random(state.seed, 0, state.randomCounter++);
         double r1, rest;
         stochasticRescalingDeviates(dof, c, random, r1, rest);
         kernel.rescaleMomenta(context, 0.5*dof*BOLTZ*integrator.getThermostatTemperature(), dof, c, r1, rest);
-        if (measureShadowWork || integrator.getMeasureHeat()) {
-            // A step that reads energies anyway: the rescaling's K and K'.
+        if (measureShadowWork) {
+            // A step that reads energies anyway: the kinetic energy before the rescaling.
             double newKinetic;
             kernel.getRescalingEnergies(context, kinetic, newKinetic);
-            if (integrator.getMeasureHeat())
-                state.heat += newKinetic - kinetic;
         }
     }
     else if (measureShadowWork)
