@@ -252,10 +252,12 @@ def test_mixed_system_matches_reference(mixed, platformName, precision, splittin
 @pytest.mark.parametrize("platformName,precision", [case for case in CASES if case[1] != "single"])
 def test_bussi_work_and_checkpoint_match_reference(platformName, precision):
     """The Bussi thermostat's work, summed on the device and read only when asked for, is Reference's
-    (the same seed draws the same deviates; the kinetic energies differ by the platforms' forces, to
-    rounding in double precision, to float's in mixed): at a checkpoint, after a load of it that
-    must drop the work done since (not read, still on the device) and keep exactly the saved value,
-    and after the run continues from the load."""
+    (the same seed draws the same deviates): at a checkpoint, after a load of it that must drop the
+    work done since (not read, still on the device) and keep exactly the saved value, and after the
+    run continues from the load. The kinetic energies differ as the platforms' trajectories do
+    (their forces differ: after 30 steps the positions are about 1e-8 nm apart in double and mixed
+    precision alike, and the work 1e-9 to 3e-8 of itself), so the work must agree to 1e-6 of itself,
+    where one step's work lost, leaked or counted twice is some 1e-2 of it."""
     cluster = systems.cluster(seed=5)
     KJ = unit.kilojoule_per_mole
     works = {}
@@ -281,6 +283,6 @@ def test_bussi_work_and_checkpoint_match_reference(platformName, precision):
     print(f"{platformName} {precision}: work {saved} then {continued} kJ/mol, Reference {refSaved} then {refContinued}; "
           f"positions {np.abs(x - refX).max():.3g} nm apart")
     assert abs(saved) > 1.0 and abs(continued - saved) > 1.0  # the thermostat does work in both halves
-    tolerance = 1e-9 if precision == "double" else 1e-4
+    tolerance = 1e-6
     assert abs(saved - refSaved) < tolerance*abs(refSaved), (saved, refSaved)
     assert abs(continued - refContinued) < tolerance*abs(refContinued), (continued, refContinued)
