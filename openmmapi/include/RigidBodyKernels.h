@@ -101,7 +101,7 @@ public:
     /**
      * The kinetic energies before and after the last rescaleMomenta(), K and K', in kJ/mol (both 0
      * before the first). On a GPU this waits for the device: call it only for a step that reads
-     * energies anyway (one that measures the shadow work or the heat).
+     * energies anyway (one that measures the shadow work).
      */
     virtual void getRescalingEnergies(OpenMM::ContextImpl& context, double& kinetic, double& newKinetic) = 0;
     /**
