@@ -27,7 +27,12 @@
  *   distributed; at T = 0 it decays as c^n; total energy minus the          *
  *   thermostat's work is conserved like the energy of the constant-energy   *
  *   integrator while the work is large; removed, the step is the            *
- *   constant-energy one bit for bit;                                        *
+ *   constant-energy one bit for bit; each step is eq. (A7) of its kinetic   *
+ *   energy with the step's deviates, as an independent transcription of the *
+ *   formula computes it on the host (bit for bit on Reference, as before    *
+ *   the factor moved to the device): the velocities, the work, the heat and *
+ *   the shadow work; a checkpoint load or a new Context drops the work the  *
+ *   kernel had not yet handed over;                                         *
  * - both: the same seed gives the same trajectory (bit for bit; on CPU with *
  *   1 or 2 threads), another seed or seed 0 another; a checkpoint continues *
  *   the random sequence (and the thermostat's work) exactly;                *
@@ -40,6 +45,7 @@
 #include "numerics/Philox.h"
 #include "numerics/StochasticRescaling.h"
 #include "openmm/CustomExternalForce.h"
+#include "openmm/reference/SimTKOpenMMRealType.h"
 
 namespace RigidBodyIntegratorTests {
 
@@ -580,6 +586,210 @@ void testThermostatSettings(Platform& platform) {
         check(std::isfinite(r.dot(r)), "the Context works after bad thermostat values");
 }
 
+
+/**
+ * Eqs. (A7) and (A8) of Bussi, Donadio and Parrinello (2007) for one step of the thermostat, written
+ * out here as RigidBodyIntegrator computed them on the host before the factor moved to the numerics
+ * core (an evaluation independent of rigidStochasticRescaling): the deviates R_1, then S (chi-squared
+ * with N_f - 1 degrees of freedom), from the step's stream, the new kinetic energy and the signed
+ * factor. For K > 0, Kbar > 0 and c < 1.
+ */
+double transcribedBussiFactor(double kinetic, double targetKinetic, int dof, double c, NormalStream& random, double& newKinetic) {
+    const double r1 = random.next(), rest = chiSquaredDeviate(dof - 1, random);
+    newKinetic = c*kinetic + (1.0 - c)*targetKinetic*(r1*r1 + rest)/dof + 2.0*r1*std::sqrt(c*(1.0 - c)*kinetic*targetKinetic/dof);
+    double alpha = std::sqrt(newKinetic/kinetic);
+    if (r1 + std::sqrt(c*dof*kinetic/((1.0 - c)*targetKinetic)) < 0.0)
+        alpha = -alpha;
+    return alpha;
+}
+
+/** The kinetic energy the thermostat aims at and c = exp(-dt/tau), as the step sequence forms them. */
+void thermostatParameters(const RigidBodyIntegrator& integrator, int dof, double& targetKinetic, double& c) {
+    targetKinetic = 0.5*dof*BOLTZ*integrator.getThermostatTemperature();
+    c = exp(-integrator.getStepSize()/integrator.getThermostatCollisionTime());
+}
+
+/** |a - alpha b| over the largest |alpha b| of the components. */
+double scaledDifference(const vector<Vec3>& a, double alpha, const vector<Vec3>& b) {
+    double worst = 0.0, largest = 0.0;
+    for (size_t i = 0; i < a.size(); i++)
+        for (int k = 0; k < 3; k++) {
+            worst = std::max(worst, fabs(a[i][k] - alpha*b[i][k]));
+            largest = std::max(largest, fabs(alpha*b[i][k]));
+        }
+    return worst/largest;
+}
+
+/**
+ * A run of the thermostat is eq. (A7) step after step. Free atoms without forces keep their
+ * velocities through a step's kicks and drifts, so the kinetic energy each step rescales is the one
+ * read after the step before (getTranslationalKineticEnergy(): the kernel's own sum), and its
+ * velocities must be the previous ones times the factor transcribedBussiFactor() computes from it
+ * with the step's deviates (stream 0 of the seed, counter n at step n); the work, read once at the
+ * end, and the heat are the sum of K' - K. On Reference bit for bit (the values of the host
+ * computation this plugin had before the factor moved to the device); elsewhere to rounding (the
+ * factor computed on the device, 1e-13). Then the heat counts only the steps that measured it.
+ */
+void testThermostatStepsFollowEquationA7(Platform& platform) {
+    System system;
+    vector<Vec3> positions, velocities;
+    std::mt19937_64 rng(17);
+    std::normal_distribution<double> normal;
+    for (int i = 0; i < 12; i++) {
+        const double mass = 10.0 + 30.0*(i%3);
+        system.addParticle(mass);
+        positions.push_back(Vec3(i%3, (i/3)%2, i/6)*0.6);
+        velocities.push_back(Vec3(normal(rng), normal(rng), normal(rng))*sqrt(boltzmann*300.0/mass));
+    }
+    RigidBodyIntegrator integrator(0.002);
+    integrator.setThermostat(250.0, 0.01);
+    integrator.setRandomNumberSeed(29);
+    integrator.setMeasureHeat(true);
+    Context context(system, integrator, platform, platformProperties);
+    context.setPositions(positions);
+    context.setVelocities(velocities);
+    const int dof = integrator.getNumDegreesOfFreedom();
+    double target, c;
+    thermostatParameters(integrator, dof, target, c);
+    const bool exact = (platform.getName() == "Reference");
+    vector<Vec3> before = velocitiesOf(context);
+    double work = 0.0, worst = 0.0;
+    for (int n = 0; n < 40; n++) {
+        const double kinetic = integrator.getTranslationalKineticEnergy() + integrator.getRotationalKineticEnergy();
+        NormalStream random(29, 0, n);
+        double newKinetic;
+        const double alpha = transcribedBussiFactor(kinetic, target, dof, c, random, newKinetic);
+        work += newKinetic - kinetic;
+        integrator.step(1);
+        const vector<Vec3> after = velocitiesOf(context);
+        const double difference = scaledDifference(after, alpha, before);
+        worst = std::max(worst, difference);
+        check(exact ? difference == 0.0 : difference < 1e-13,
+              message("thermostat, step ", n, ": velocities ", difference, " (relative) from alpha = ", alpha, " times the last"));
+        before = after;
+    }
+    const double measured = integrator.getThermostatWork(), heat = integrator.getHeat();
+    string report = message("thermostat: 40 steps of eq. (A7): velocities within ", worst, " (relative), work ", measured,
+                            " kJ/mol (transcription ", work, "), heat ", heat);
+    std::cout << report << std::endl;
+    check(exact ? measured == work && heat == work : fabs(measured - work) < 1e-12*fabs(work) && fabs(heat - work) < 1e-12*fabs(work),
+          report);
+    check(fabs(work) > 1.0, report);  // the run does exchange energy with the bath
+    // The heat is the work of the steps that measured it: 10 steps without, 10 with. Each part of
+    // the work is summed from 0 by the kernel and added when the host takes it (at the switch and
+    // at the read).
+    integrator.setMeasureHeat(false);
+    double parts[2] = {0.0, 0.0};
+    for (int n = 40; n < 60; n++) {
+        if (n == 50)
+            integrator.setMeasureHeat(true);
+        const double kinetic = integrator.getTranslationalKineticEnergy() + integrator.getRotationalKineticEnergy();
+        NormalStream random(29, 0, n);
+        double newKinetic;
+        transcribedBussiFactor(kinetic, target, dof, c, random, newKinetic);
+        parts[n < 50 ? 0 : 1] += newKinetic - kinetic;
+        integrator.step(1);
+    }
+    const double lastHeat = integrator.getHeat(), lastWork = integrator.getThermostatWork();
+    const double expectedHeat = heat + parts[1], expectedWork = (measured + parts[0]) + parts[1];
+    report = message("thermostat: heat ", lastHeat, " kJ/mol (expected ", expectedHeat, "), work ", lastWork, " (expected ",
+                     expectedWork, ") after 10 steps without and 10 with the heat measured");
+    check(exact ? lastHeat == expectedHeat && lastWork == expectedWork
+                : fabs(lastHeat - expectedHeat) < 1e-12*fabs(work) && fabs(lastWork - expectedWork) < 1e-12*fabs(work), report);
+    check(fabs(parts[0]) > 1e-3 && fabs(parts[1]) > 1e-3, report);
+}
+
+/**
+ * One step of bodies with forces: two Contexts start from the same state, one with the thermostat,
+ * one without; their step is the same up to the rescaling, so the thermostat's positions must be the
+ * other's and its velocities the other's times the factor transcribedBussiFactor() computes from the
+ * other's kinetic energy (the same sum, translation plus rotation, of the same velocities) with the
+ * deviates of counter 0; its work and heat are K' - K, and its shadow work (which leaves the
+ * rescaling out) the other's. States along a thermostatted run of the interacting cluster. Bit for
+ * bit on Reference; elsewhere to rounding.
+ */
+void testThermostatStepWithBodies(Platform& platform) {
+    Scene scene = makeCluster(7, 3, 3, 2, true);
+    Run run = startThermostat(scene, platform, 200.0, 0.02, 0.002, 5);
+    const bool exact = (platform.getName() == "Reference");
+    double worst = 0.0;
+    for (int sample = 0; sample < 3; sample++) {
+        run.integrator->step(15);
+        Scene state = scene;
+        state.positions = positionsOf(*run.context);
+        state.velocities = velocitiesOf(*run.context);
+        Run thermostat = startThermostat(state, platform, 200.0, 0.02, 0.002, 11);
+        Run plain = startRigid(state, platform, 0.002, RigidBodyIntegrator::Exact);
+        for (RigidBodyIntegrator* integrator : {thermostat.integrator.get(), plain.integrator.get()})
+            integrator->setMeasureShadowWork(true);
+        thermostat.integrator->setMeasureHeat(true);
+        thermostat.integrator->step(1);
+        plain.integrator->step(1);
+        const int dof = thermostat.integrator->getNumDegreesOfFreedom();
+        double target, c, newKinetic;
+        thermostatParameters(*thermostat.integrator, dof, target, c);
+        const double kinetic = plain.integrator->getTranslationalKineticEnergy() + plain.integrator->getRotationalKineticEnergy();
+        NormalStream random(11, 0, 0);
+        const double alpha = transcribedBussiFactor(kinetic, target, dof, c, random, newKinetic);
+        const double moved = maxDifference(positionsOf(*thermostat.context), positionsOf(*plain.context));
+        const double scaled = scaledDifference(velocitiesOf(*thermostat.context), alpha, velocitiesOf(*plain.context));
+        const double work = thermostat.integrator->getThermostatWork(), heat = thermostat.integrator->getHeat();
+        const double shadow = thermostat.integrator->getShadowWork(), plainShadow = plain.integrator->getShadowWork();
+        worst = std::max(worst, scaled);
+        string report = message("thermostat, one step with bodies (sample ", sample, "): alpha ", alpha, ", positions ", moved,
+                                " nm apart, velocities ", scaled, " (relative), work ", work, " (transcription ", newKinetic - kinetic,
+                                "), heat ", heat, ", shadow work ", shadow, " (without the thermostat ", plainShadow, ")");
+        if (exact)
+            check(moved == 0.0 && scaled == 0.0 && work == newKinetic - kinetic && heat == work && shadow == plainShadow, report);
+        else
+            check(moved < 1e-12 && scaled < 1e-12 && fabs(work - (newKinetic - kinetic)) < 1e-10*fabs(kinetic) &&
+                  fabs(heat - work) < 1e-10*fabs(kinetic) && fabs(shadow - plainShadow) < 1e-10*fabs(kinetic), report);
+        check(fabs(alpha - 1.0) > 1e-3, report);  // a rescaling that would show
+    }
+    std::cout << "thermostat: one step with bodies is eq. (A7) of its kinetic energy, velocities within " << worst << std::endl;
+}
+
+/**
+ * The work the kernel accumulates between reads belongs to the state it was done in: a checkpoint
+ * saves it (createCheckpoint takes it from the kernel), loading a checkpoint replaces it (the steps
+ * taken since the save must not leak in), Context::reinitialize(true) keeps it and
+ * reinitialize(false) starts again from 0. A twin Context with the same seed reads the work at the
+ * same steps.
+ */
+void testThermostatPendingWork(Platform& platform) {
+    Scene scene = makeCluster(11, 3, 3, 2, true);
+    Run run = startThermostat(scene, platform, 200.0, 0.01, 0.002, 3);
+    Run twin = startThermostat(scene, platform, 200.0, 0.01, 0.002, 3);
+    run.integrator->step(20);
+    twin.integrator->step(20);
+    std::stringstream checkpoint;
+    run.context->createCheckpoint(checkpoint);
+    const double saved = twin.integrator->getThermostatWork();
+    // Work done after the save, never read, then the checkpoint loaded: exactly the saved work.
+    run.integrator->step(30);
+    twin.integrator->step(30);
+    run.context->loadCheckpoint(checkpoint);
+    const double loaded = run.integrator->getThermostatWork(), later = twin.integrator->getThermostatWork();
+    string report = message("thermostat: work ", saved, " kJ/mol at the checkpoint, ", later, " 30 steps later, ", loaded,
+                            " after loading the checkpoint");
+    check(loaded == saved, report);
+    check(fabs(later - saved) > 1.0, report);  // the steps after the save did work
+    // The loaded run continues the twin's (to the rounding of the re-fit bodies), the work included.
+    run.integrator->step(30);
+    const double continued = run.integrator->getThermostatWork();
+    check(fabs(continued - later) < 1e-9*fabs(later), message("thermostat: work ", continued, " after the load, ", later, " straight on"));
+    // Work not yet read survives reinitialize(true), and reinitialize(false) drops it.
+    run.integrator->step(10);
+    twin.integrator->step(10);
+    run.context->reinitialize(true);
+    const double kept = run.integrator->getThermostatWork(), straight = twin.integrator->getThermostatWork();
+    check(fabs(kept - straight) < 1e-9*fabs(straight) && fabs(kept - continued) > 1.0,
+          message("thermostat: work ", kept, " after reinitialize(true), ", straight, " straight on, ", continued, " 10 steps before"));
+    run.integrator->step(10);
+    run.context->reinitialize(false);
+    check(run.integrator->getThermostatWork() == 0.0, "thermostat: work left after reinitialize(false)");
+}
+
 // ------------------------------------------------------------------------------------------------
 
 /** Run every constant-temperature test on platform; print each failure and return the number of failures. */
@@ -600,6 +810,9 @@ int runThermostatTests(Platform& platform) {
         {"thermostat: damped at zero temperature", [&]() { testThermostatDampsAtZeroTemperature(platform); }},
         {"thermostat: effective energy conserved", [&]() { testThermostatEffectiveEnergy(platform); }},
         {"thermostat: removal, seeds, threads, checkpoints, bad values", [&]() { testThermostatSettings(platform); }},
+        {"thermostat: steps of free atoms follow eq. (A7)", [&]() { testThermostatStepsFollowEquationA7(platform); }},
+        {"thermostat: a step with bodies is eq. (A7) of its kinetic energy", [&]() { testThermostatStepWithBodies(platform); }},
+        {"thermostat: pending work, checkpoints and reinitialize", [&]() { testThermostatPendingWork(platform); }},
     };
     return runTestList(tests);
 }

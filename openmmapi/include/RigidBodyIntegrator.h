@@ -199,7 +199,8 @@ public:
      * Get the kinetic energy the thermostat has added to the system since the Context was created
      * (negative where it removed energy). The total energy minus this is Bussi's effective energy,
      * conserved up to the integration error. Saved in checkpoints. Only available once the
-     * integrator is bound to a Context.
+     * integrator is bound to a Context. On OpenCL and CUDA the work is summed on the device, and
+     * this call waits for the device to read it: call it where the value is needed, not every step.
      *
      * @return the energy added, measured in kJ/mol
      */

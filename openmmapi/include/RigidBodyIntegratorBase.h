@@ -196,13 +196,12 @@ public:
      * Set whether to measure the heat: the kinetic energy that the stochastic part of each step (the
      * Ornstein-Uhlenbeck stage of RigidBodyLangevinIntegrator, the rescaling of RigidBodyIntegrator's
      * thermostat) adds, summed over the steps (see getHeat()). Off by default; for
-     * RigidBodyLangevinIntegrator it costs two kinetic energies per step. Takes effect at the next step.
+     * RigidBodyLangevinIntegrator it costs two kinetic energies per step, for RigidBodyIntegrator's
+     * thermostat nothing (the heat is its work, summed with it). Takes effect at the next step.
      *
      * @param measure  true to measure it
      */
-    void setMeasureHeat(bool measure) {
-        measureHeat = measure;
-    }
+    void setMeasureHeat(bool measure);
     /** Get whether the heat is measured (see setMeasureHeat()). */
     bool getMeasureHeat() const {
         return measureHeat;
@@ -380,8 +379,19 @@ protected:
     IntegrateRigidBodyStepKernel& getKernel() const;
     /** The body topology, once the integrator is bound to a Context (throws otherwise). */
     const RigidBodySystem& getTopology() const;
-    /** What the step sequence keeps between steps (random numbers, thermostat work). */
-    StepState stepState;
+    /**
+     * Add the thermostat's work the kernel has accumulated since it was last taken (rescaleMomenta()
+     * on the device) to stepState.thermostatWork, and to stepState.heat if the heat is measured, if
+     * hasThermostatWork(): before the work or the heat is read, saved or reset, and before
+     * setMeasureHeat() changes what the steps since belong to. On a GPU this waits for the device
+     * (unless no step has rescaled since).
+     */
+    void takeThermostatWork() const;
+    /**
+     * What the step sequence keeps between steps (random numbers, thermostat work). Mutable so that
+     * the const createCheckpoint() can take the kernel's pending thermostat work into it.
+     */
+    mutable StepState stepState;
 private:
     /** Body b, with its shape (an OpenMMException if it is an explicit body whose positions were never set). */
     const RigidBodySystem& getShapedBody(int b) const;

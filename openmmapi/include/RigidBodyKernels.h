@@ -83,8 +83,33 @@ public:
      * heat of an Ornstein-Uhlenbeck stage). Changes no momentum and applies no constraint.
      */
     virtual void writeBodyVelocities(OpenMM::ContextImpl& context) = 0;
-    /** Stage: every momentum times alpha (after a closing kick). */
-    virtual void scaleMomenta(OpenMM::ContextImpl& context, double alpha) = 0;
+    /**
+     * Stage: one step of the Bussi thermostat (after a closing kick): the kinetic energy K of the
+     * Context's velocities (as computeKineticEnergies() sums it), the factor alpha and the new kinetic
+     * energy K' from rigidStochasticRescaling() (numerics/core/CoreThermostat.h, eq. (A7) of Bussi,
+     * Donadio and Parrinello (2007)) with the deviates the host drew, every momentum times alpha, and
+     * K' - K added to the thermostat's work the kernel accumulates (takeThermostatWork()). On a GPU
+     * all of it stays on the device: the host reads nothing.
+     *
+     * @param targetKinetic  Kbar = N_f kT/2, in kJ/mol
+     * @param dof            N_f, the number of degrees of freedom
+     * @param c              exp(-dt/tau)
+     * @param r1             R_1 of eq. (A7), a standard normal deviate
+     * @param rest           S of eq. (A7), a chi-squared deviate with N_f - 1 degrees of freedom
+     */
+    virtual void rescaleMomenta(OpenMM::ContextImpl& context, double targetKinetic, int dof, double c, double r1, double rest) = 0;
+    /**
+     * The kinetic energies before and after the last rescaleMomenta(), K and K', in kJ/mol (both 0
+     * before the first). On a GPU this waits for the device: call it only for a step that reads
+     * energies anyway (one that measures the shadow work).
+     */
+    virtual void getRescalingEnergies(OpenMM::ContextImpl& context, double& kinetic, double& newKinetic) = 0;
+    /**
+     * The thermostat's work, sum of K' - K, that rescaleMomenta() has accumulated since the last call,
+     * in kJ/mol; the kernel's sum starts again from 0. On a GPU this waits for the device (unless
+     * nothing was rescaled since the last call): call it only where the host needs the work.
+     */
+    virtual double takeThermostatWork(OpenMM::ContextImpl& context) = 0;
     /**
      * The kinetic energy of the context's velocities, split into translation (centres of mass and
      * free particles) and rotation (about the centres of mass).

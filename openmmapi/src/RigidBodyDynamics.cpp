@@ -415,6 +415,14 @@ void RigidBodyDynamics::scaleMomenta(vector<Vec3>& velocities, double alpha) {
     writtenVelocities = velocities;
 }
 
+void RigidBodyDynamics::rescaleMomenta(vector<Vec3>& velocities, double targetKinetic, int dof, double c, double r1, double rest,
+                                       double& kinetic, double& newKinetic) {
+    double translational, rotational;
+    computeKineticEnergies(velocities, translational, rotational);
+    kinetic = translational + rotational;
+    scaleMomenta(velocities, rigidStochasticRescaling(kinetic, targetKinetic, dof, c, r1, rest, &newKinetic));
+}
+
 void RigidBodyDynamics::closingKick(vector<Vec3>& positions, vector<Vec3>& velocities, const vector<Vec3>& forces,
                                     double kick, double constraintTolerance) {
     requireConstraints();

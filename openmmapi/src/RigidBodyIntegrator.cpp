@@ -87,6 +87,7 @@ AccuracyCheck::Setting RigidBodyIntegrator::getAccuracySetting() const {
 
 double RigidBodyIntegrator::getThermostatWork() {
     getKernel();  // throws unless bound
+    takeThermostatWork();
     return stepState.thermostatWork;
 }
 

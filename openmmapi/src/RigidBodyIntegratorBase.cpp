@@ -264,10 +264,18 @@ double RigidBodyIntegratorBase::getShadowWork() const {
     return stepState.shadowWork;
 }
 
+void RigidBodyIntegratorBase::setMeasureHeat(bool measure) {
+    // The work the kernel holds is heat or not as the steps that did it measured it.
+    if (bound && measure != measureHeat)
+        takeThermostatWork();
+    measureHeat = measure;
+}
+
 double RigidBodyIntegratorBase::getHeat() const {
     getKernel();  // throws unless bound
     if (!measureHeat)
         throw OpenMMException(className + ".getHeat: the heat is not measured; call setMeasureHeat(True) before the steps");
+    takeThermostatWork();
     return stepState.heat;
 }
 
@@ -304,6 +312,7 @@ void RigidBodyIntegratorBase::resetShadowWork() {
 
 void RigidBodyIntegratorBase::resetHeat() {
     getKernel();  // throws unless bound
+    takeThermostatWork();
     stepState.heat = 0.0;
 }
 
@@ -440,6 +449,7 @@ void RigidBodyIntegratorBase::createCheckpoint(ostream& stream) const {
     int32_t length = className.size();
     stream.write((const char*) &length, sizeof(length));
     stream.write(className.data(), length);
+    takeThermostatWork();
     stream.write((const char*) &stepState.seed, sizeof(stepState.seed));
     stream.write((const char*) &stepState.randomCounter, sizeof(stepState.randomCounter));
     if (hasThermostatWork())
@@ -479,8 +489,10 @@ void RigidBodyIntegratorBase::loadCheckpoint(istream& stream) {
     // Before headers the integrator's data ended the checkpoint: one that ends here was written before
     // the integrator had random numbers (a RigidBodyIntegrator without a thermostat), and means "none
     // drawn yet".
-    if (version == 0 && stream.peek() == char_traits<char>::eof())
+    if (version == 0 && stream.peek() == char_traits<char>::eof()) {
         stream.clear();
+        takeThermostatWork();  // the step state stays, with all its work
+    }
     else {
         StepState saved;
         stream.read((char*) &saved.seed, sizeof(saved.seed));
@@ -500,6 +512,8 @@ void RigidBodyIntegratorBase::loadCheckpoint(istream& stream) {
                 throw OpenMMException(className + ": the checkpoint ends within the integrator's shadow work and heat");
         }
         stepState = saved;
+        // The work the kernel accumulated since it was last taken belongs to the state replaced: dropped.
+        getKernel().takeThermostatWork(*context);
     }
     loadedVelocityKick = getLoadedVelocityKick(version);
     accuracyMonitor.stateSet();
@@ -540,6 +554,16 @@ double RigidBodyIntegratorBase::computeKickedKineticEnergy(double kick, const st
     double translational, rotational;
     getKernel().computeKickedKineticEnergies(*context, kick, getConstraintTolerance(), translational, rotational);
     return translational + rotational;
+}
+
+void RigidBodyIntegratorBase::takeThermostatWork() const {
+    if (!hasThermostatWork())
+        return;
+    const double work = getKernel().takeThermostatWork(*context);
+    stepState.thermostatWork += work;
+    // The heat of RigidBodyIntegrator is its thermostat's work over the steps that measured it.
+    if (measureHeat)
+        stepState.heat += work;
 }
 
 void RigidBodyIntegratorBase::step(int steps) {

@@ -106,18 +106,21 @@ void stepRigidBodyIntegrator(ContextImpl& context, IntegrateRigidBodyStepKernel&
     if (integrator.hasThermostat()) {
         // Bussi, Donadio and Parrinello, J. Chem. Phys. 126, 014101 (2007), eq. (A7): one global
         // factor for every momentum, from the exact solution over this step of the stochastic
-        // equation for the kinetic energy.
-        double translational, rotational, newKinetic;
-        kernel.computeKineticEnergies(context, translational, rotational);
-        kinetic = translational + rotational;
+        // equation for the kinetic energy. Its deviates do not depend on the kinetic energy: drawn
+        // here, they go to the kernel, which sums K, takes the factor and scales where the momenta
+        // are (on a GPU without the host reading anything) and accumulates the work K' - K, which
+        // is also the heat (RigidBodyIntegratorBase::takeThermostatWork()).
         const int dof = bodies.getNumDegreesOfFreedom();
+        const double c = exp(-dt/integrator.getThermostatCollisionTime());
         NormalStream random(state.seed, 0, state.randomCounter++);
-        double alpha = stochasticRescalingFactor(kinetic, 0.5*dof*BOLTZ*integrator.getThermostatTemperature(),
-                                                 dof, exp(-dt/integrator.getThermostatCollisionTime()), random, newKinetic);
-        kernel.scaleMomenta(context, alpha);
-        state.thermostatWork += newKinetic - kinetic;
-        if (integrator.getMeasureHeat())
-            state.heat += newKinetic - kinetic;
+        double r1, rest;
+        stochasticRescalingDeviates(dof, c, random, r1, rest);
+        kernel.rescaleMomenta(context, 0.5*dof*BOLTZ*integrator.getThermostatTemperature(), dof, c, r1, rest);
+        if (measureShadowWork) {
+            // A step that reads energies anyway: the kinetic energy before the rescaling.
+            double newKinetic;
+            kernel.getRescalingEnergies(context, kinetic, newKinetic);
+        }
     }
     else if (measureShadowWork)
         kinetic = kineticEnergy(context, kernel);

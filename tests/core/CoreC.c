@@ -6,7 +6,8 @@
  * -std=c99 -pedantic -Wall -Wextra -Werror (tests/CMakeLists.txt). The few   *
  * functions below expose it with C linkage to TestCoreC.cpp, which compares  *
  * every result with the C++ API (FreeRotor, Special::, noSquishRotate,       *
- * NormalStream) bit for bit: the same text must give the same numbers.       *
+ * NormalStream, stochasticRescalingFactor) bit for bit: the same text must   *
+ * give the same numbers.                                                     *
  * -------------------------------------------------------------------------- */
 
 #include "numerics/core/CorePreludeC.h"
@@ -15,6 +16,7 @@
 #include "numerics/core/CoreRotor.h"
 #include "numerics/core/CoreNoSquish.h"
 #include "numerics/core/CorePhilox.h"
+#include "numerics/core/CoreThermostat.h"
 
 #include "CoreC.h"
 
@@ -126,4 +128,8 @@ void coreCNormals(uint64_t seed, uint32_t stream, uint64_t step, int count, doub
 
 void coreCPhilox(const uint32_t* counter, const uint32_t* key, uint32_t* block) {
     rigidPhilox4x32(counter, key, block);
+}
+
+double coreCStochasticRescaling(double kinetic, double targetKinetic, int dof, double c, double r1, double rest, double* newKinetic) {
+    return rigidStochasticRescaling(kinetic, targetKinetic, dof, c, r1, rest, newKinetic);
 }

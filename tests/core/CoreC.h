@@ -24,6 +24,7 @@ double coreCRotationalEnergy(const double* moments, const double* angularMomentu
 void coreCNoSquish(const double* moments, double dt, double* attitude, double* angularMomentum);
 void coreCNormals(uint64_t seed, uint32_t stream, uint64_t step, int count, double* normals, double* uniform);
 void coreCPhilox(const uint32_t* counter, const uint32_t* key, uint32_t* block);
+double coreCStochasticRescaling(double kinetic, double targetKinetic, int dof, double c, double r1, double rest, double* newKinetic);
 
 #ifdef __cplusplus
 }

@@ -1,8 +1,8 @@
 /*
  * The numerics core as OpenCL C kernel source, the way a common-compute platform builds it: the
  * common prelude, the core files, then a kernel. tests/CMakeLists.txt compiles this offline with
- * clang for a SPIR target (no OpenCL runtime needed); the kernel is the shape of a drift's
- * rotation: classify the moments, advance each body exactly.
+ * clang for a SPIR target (no OpenCL runtime needed); the kernels are the shape of a drift's
+ * rotation (classify the moments, advance each body exactly) and the Bussi thermostat's factor.
  */
 #include "numerics/core/CorePreludeCommon.h"
 #include "numerics/core/CoreBasics.h"
@@ -10,6 +10,7 @@
 #include "numerics/core/CoreRotor.h"
 #include "numerics/core/CoreNoSquish.h"
 #include "numerics/core/CorePhilox.h"
+#include "numerics/core/CoreThermostat.h"
 
 __kernel void rotateBodies(int numBodies, __global const double* moments, __global double* omega,
                            __global double* attitude, double dt, int useNoSquish, ulong seed, ulong step,
@@ -46,4 +47,15 @@ __kernel void rotateBodies(int numBodies, __global const double* moments, __glob
         for (j = 0; j < 3; j++)
             attitude[9*b + 3*k + j] = a[k][j];
     }
+}
+
+/* The Bussi thermostat's factor and new kinetic energy for each case: inputs K, Kbar, c, R_1, S. */
+__kernel void stochasticRescaling(int count, __global const double* inputs, __global const int* dofs, __global double* outputs) {
+    const int n = get_global_id(0);
+    double newKinetic;
+    if (n >= count)
+        return;
+    outputs[2*n] = rigidStochasticRescaling(inputs[5*n], inputs[5*n + 1], dofs[n], inputs[5*n + 2], inputs[5*n + 3], inputs[5*n + 4],
+                                            &newKinetic);
+    outputs[2*n + 1] = newKinetic;
 }

@@ -4,8 +4,10 @@
  * The numerics core compiled as C (CoreC.c, C99 behind core/CorePreludeC.h)  *
  * against the same text compiled as C++ inside the validating API: FreeRotor *
  * (evolve in every representation, and advance), rigidClassifyMoments,       *
- * Special:: (Jacobi functions, RF, RJ, K), noSquishRotate, philox4x32 and    *
- * NormalStream. Bodies of every kind and regime (generic, near and on the    *
+ * Special:: (Jacobi functions, RF, RJ, K), noSquishRotate, philox4x32,       *
+ * NormalStream and the Bussi thermostat's factor (rigidStochasticRescaling,  *
+ * also against an independent transcription of eqs. (A7) and (A8) and the   *
+ * closed forms of its special cases). Bodies of every kind and regime (generic, near and on the    *
  * separatrix, steady rotation about each axis, tiny off-axis components,     *
  * omega = 0, nearly symmetric, moments snapped by the classification,        *
  * subnormal and huge omega), times of both signs up to many periods.         *
@@ -20,6 +22,7 @@
 #include "numerics/FreeRotor.h"
 #include "numerics/NoSquish.h"
 #include "numerics/Philox.h"
+#include "numerics/StochasticRescaling.h"
 #include "openmm/internal/AssertionUtilities.h"
 #include <algorithm>
 #include <array>
@@ -297,6 +300,92 @@ void testRaisedMoments() {
     ASSERT_EQUAL_TOL(0.25 + 1.0, rigidRotationalEnergy(linear, momentum), 1e-15);
 }
 
+/**
+ * The Bussi thermostat's factor, rigidStochasticRescaling (numerics/core/CoreThermostat.h), in each
+ * of its regimes: C and C++ give the same bits; the generic case, with alpha of either sign, is
+ * eqs. (A7) and (A8) as written out here (the thermostat's host code before the factor moved to the
+ * core) to the last bit, with alpha^2 K = K' to rounding; K <= 0, N_f <= 0 and c >= 1 scale nothing
+ * (alpha 1, K' = K); Kbar = 0 damps, alpha = sqrt(c) and K' = c K exactly. The C++ wrapper
+ * stochasticRescalingFactor is the core applied to the deviates stochasticRescalingDeviates draws,
+ * R_1 and then S from the same stream, also where K = 0.
+ */
+void testStochasticRescaling() {
+    auto both = [](double kinetic, double target, int dof, double c, double r1, double rest, double& newKinetic) {
+        double newKineticC;
+        const double alpha = rigidStochasticRescaling(kinetic, target, dof, c, r1, rest, &newKinetic);
+        assertSameBits(alpha, coreCStochasticRescaling(kinetic, target, dof, c, r1, rest, &newKineticC), "alpha", __LINE__);
+        assertSameBits(newKinetic, newKineticC, "K'", __LINE__);
+        return alpha;
+    };
+    // Generic: K, Kbar and N_f over decades, c from strong to weak coupling, deviates of both signs.
+    int negative = 0;
+    for (int trial = 0; trial < 400; trial++) {
+        const int dof = 1 + (int) uniform(0, trial%2 == 0 ? 10 : 3000);
+        const double target = 0.5*dof*uniform(0.01, 10), kinetic = target*std::exp(uniform(-6, 2));
+        const double c = (trial%4 == 0 ? uniform(0.0, 0.05) : uniform(0.0, 1.0)), r1 = 3*normal();
+        const double rest = (dof - 1)*uniform(0.5, 1.5);  // S is near its mean, N_f - 1
+        double newKinetic;
+        const double alpha = both(kinetic, target, dof, c, r1, rest, newKinetic);
+        // eqs. (A7) and (A8), independently written
+        double expected = c*kinetic + (1.0 - c)*target*(r1*r1 + rest)/dof + 2.0*r1*std::sqrt(c*(1.0 - c)*kinetic*target/dof);
+        double expectedAlpha = std::sqrt(expected/kinetic);
+        if (r1 + std::sqrt(c*dof*kinetic/((1.0 - c)*target)) < 0.0)
+            expectedAlpha = -expectedAlpha;
+        assertSameBits(expected, newKinetic, "K' of eq. (A7)", __LINE__);
+        assertSameBits(expectedAlpha, alpha, "alpha of eqs. (A7), (A8)", __LINE__);
+        ASSERT_EQUAL_TOL(newKinetic, alpha*alpha*kinetic, 1e-14);
+        negative += (alpha < 0);
+    }
+    // A scaling through zero (eq. (A8)): small K, strong coupling, R_1 below -sqrt(c N_f K/((1 - c) Kbar)).
+    for (int dof : {1, 4, 50}) {
+        const double kinetic = 0.01, target = 10.0*dof, c = 0.1, r1 = -1.5;
+        ASSERT(r1 + std::sqrt(c*dof*kinetic/((1.0 - c)*target)) < 0.0);
+        double newKinetic;
+        const double alpha = both(kinetic, target, dof, c, r1, 0.5*dof, newKinetic);
+        ASSERT(alpha < 0.0);
+        ASSERT_EQUAL_TOL(newKinetic, alpha*alpha*kinetic, 1e-14);
+        negative++;
+    }
+    ASSERT(negative >= 3);
+    // No scaling: K <= 0 (or not a number), N_f <= 0, c >= 1.
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    const double none[][4] = {{0.0, 5.0, 6, 0.5}, {-2.0, 5.0, 6, 0.5}, {nan, 5.0, 6, 0.5}, {3.0, 5.0, 0, 0.5}, {3.0, 5.0, -2, 0.5},
+                              {3.0, 5.0, 6, 1.0}, {3.0, 5.0, 6, 1.5}, {0.0, 0.0, 6, 0.5}};
+    for (const auto& values : none) {
+        double newKinetic;
+        comparisons++;
+        const double alpha = rigidStochasticRescaling(values[0], values[1], (int) values[2], values[3], 0.7, 2.0, &newKinetic);
+        double newKineticC;
+        ASSERT(alpha == 1.0 && coreCStochasticRescaling(values[0], values[1], (int) values[2], values[3], 0.7, 2.0, &newKineticC) == 1.0);
+        ASSERT(std::memcmp(&newKinetic, &values[0], sizeof(double)) == 0 && std::memcmp(&newKineticC, &values[0], sizeof(double)) == 0);
+    }
+    // Kbar = 0 (or below): damping, K' = c K.
+    for (double target : {0.0, -1.0})
+        for (double c : {0.0, 0.3, 0.999}) {
+            double newKinetic;
+            const double alpha = both(7.5, target, 6, c, -2.0, 3.0, newKinetic);
+            assertSameBits(std::sqrt(c), alpha, "alpha at Kbar = 0", __LINE__);
+            assertSameBits(c*7.5, newKinetic, "K' at Kbar = 0", __LINE__);
+        }
+    // The wrapper: the deviates R_1 then S (chi-squared, N_f - 1), drawn whenever N_f > 0 and c < 1.
+    for (int dof : {1, 2, 33, 400})
+        for (double kinetic : {0.0, 12.0}) {
+            NormalStream random(99, dof, 3), copy(99, dof, 3);
+            double newKinetic, newKineticCore;
+            const double alpha = stochasticRescalingFactor(kinetic, 0.5*dof*2.5, dof, 0.8, random, newKinetic);
+            const double r1 = copy.next(), rest = chiSquaredDeviate(dof - 1, copy);
+            assertSameBits(rigidStochasticRescaling(kinetic, 0.5*dof*2.5, dof, 0.8, r1, rest, &newKineticCore), alpha, "wrapper alpha", __LINE__);
+            assertSameBits(newKineticCore, newKinetic, "wrapper K'", __LINE__);
+            assertSameBits(copy.next(), random.next(), "the stream after the deviates", __LINE__);
+        }
+    NormalStream unused(99, 0, 0), fresh(99, 0, 0);
+    double r1 = -1.0, rest = -1.0;
+    stochasticRescalingDeviates(0, 0.5, unused, r1, rest);
+    stochasticRescalingDeviates(6, 1.0, unused, r1, rest);
+    ASSERT(r1 == 0.0 && rest == 0.0);
+    assertSameBits(fresh.next(), unused.next(), "no deviates drawn for N_f = 0 or c = 1", __LINE__);
+}
+
 void testCoreConstants() {
     volatile double eps = std::numeric_limits<double>::epsilon();  // volatile: computed at run time, as the old code did
     assertSameBits(std::pow(3.0*eps, -1.0/8.0), rigidRFStopFactor(), "RF stop factor", __LINE__);
@@ -314,6 +403,7 @@ int main() {
         testSpecialFunctions();
         testNoSquishAndRandomNumbers();
         testRaisedMoments();
+        testStochasticRescaling();
         std::cout << comparisons << " values identical in C and C++" << std::endl;
     }
     catch (const std::exception& e) {

@@ -5,7 +5,9 @@
  * prelude, the core files and a drift kernel) on whatever OpenCL device is   *
  * present (PoCL on a CPU in the project's test machines), against the C++    *
  * API on the host: FreeRotor::advance for bodies of every kind and regime,   *
- * noSquishRotate, and the first normal deviate of NormalStream. Built only   *
+ * noSquishRotate, the first normal deviate of NormalStream, and the Bussi    *
+ * thermostat's factor (rigidStochasticRescaling: generic, alpha < 0 by eq.   *
+ * (A8), K <= 0, Kbar = 0, c = 1, N_f = 0; 1e-14 relative). Built only       *
  * where CMake finds OpenCL; exits with 77 (skipped) without a device.        *
  *                                                                            *
  * The device has its own libm and may contract products into fused          *
@@ -18,6 +20,7 @@
 #include "numerics/FreeRotor.h"
 #include "numerics/NoSquish.h"
 #include "numerics/Philox.h"
+#include "numerics/RigidCore.h"
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -181,11 +184,78 @@ int main() {
                 }
             }
         clReleaseKernel(kernel);
+
+        // The thermostat's factor in each regime, against the host's core.
+        struct Case {
+            double kinetic, target, c, r1, rest;
+            int dof;
+        };
+        std::vector<Case> cases;
+        for (int n = 0; n < 200; n++) {
+            const int dof = 1 + (int) (std::uniform_real_distribution<double>(0, n%2 == 0 ? 10 : 3000)(rng));
+            const double target = 0.5*dof*std::uniform_real_distribution<double>(0.01, 10)(rng);
+            cases.push_back({target*std::exp(std::uniform_real_distribution<double>(-6, 2)(rng)), target,
+                             std::uniform_real_distribution<double>(0, 1)(rng), 3*normal(rng),
+                             (dof - 1)*std::uniform_real_distribution<double>(0.5, 1.5)(rng), dof});
+        }
+        for (int dof : {1, 4, 50})
+            cases.push_back({0.01, 10.0*dof, 0.1, -1.5, 0.5*dof, dof});  // alpha < 0 (eq. (A8))
+        cases.push_back({0.0, 5.0, 0.5, 0.7, 2.0, 6});   // K = 0
+        cases.push_back({-2.0, 5.0, 0.5, 0.7, 2.0, 6});  // K < 0
+        cases.push_back({3.0, 0.0, 0.3, 0.7, 2.0, 6});   // Kbar = 0: damping
+        cases.push_back({3.0, 5.0, 1.0, 0.7, 2.0, 6});   // c = 1
+        cases.push_back({3.0, 5.0, 0.5, 0.7, 2.0, 0});   // N_f = 0
+        const int numCases = cases.size();
+        std::vector<double> inputs;
+        std::vector<cl_int> dofs;
+        for (const Case& k : cases) {
+            inputs.insert(inputs.end(), {k.kinetic, k.target, k.c, k.r1, k.rest});
+            dofs.push_back(k.dof);
+        }
+        cl_kernel rescaling = clCreateKernel(program, "stochasticRescaling", &error);
+        check(error, "clCreateKernel");
+        cl_mem inputBuffer = clCreateBuffer(context, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(double)*inputs.size(), inputs.data(), &error);
+        cl_mem dofBuffer = clCreateBuffer(context, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(cl_int)*dofs.size(), dofs.data(), &error);
+        cl_mem outputBuffer = clCreateBuffer(context, CL_MEM_WRITE_ONLY, sizeof(double)*2*numCases, nullptr, &error);
+        check(error, "clCreateBuffer");
+        check(clSetKernelArg(rescaling, 0, sizeof(int), &numCases), "clSetKernelArg");
+        check(clSetKernelArg(rescaling, 1, sizeof(cl_mem), &inputBuffer), "clSetKernelArg");
+        check(clSetKernelArg(rescaling, 2, sizeof(cl_mem), &dofBuffer), "clSetKernelArg");
+        check(clSetKernelArg(rescaling, 3, sizeof(cl_mem), &outputBuffer), "clSetKernelArg");
+        size_t global = numCases;
+        check(clEnqueueNDRangeKernel(queue, rescaling, 1, nullptr, &global, nullptr, 0, nullptr, nullptr), "clEnqueueNDRangeKernel");
+        std::vector<double> outputs(2*numCases);
+        check(clEnqueueReadBuffer(queue, outputBuffer, CL_TRUE, 0, sizeof(double)*outputs.size(), outputs.data(), 0, nullptr, nullptr), "read");
+        for (cl_mem buffer : {inputBuffer, dofBuffer, outputBuffer})
+            clReleaseMemObject(buffer);
+        clReleaseKernel(rescaling);
+        double largestRescaling = 0.0;
+        int negative = 0;
+        for (int n = 0; n < numCases; n++) {
+            const Case& k = cases[n];
+            double newKinetic;
+            const double alpha = rigidStochasticRescaling(k.kinetic, k.target, k.dof, k.c, k.r1, k.rest, &newKinetic);
+            const double deviation = std::max(std::fabs(outputs[2*n] - alpha)/std::fabs(alpha),
+                                              std::fabs(outputs[2*n + 1] - newKinetic)/std::max(std::fabs(newKinetic), 1e-300));
+            largestRescaling = std::max(largestRescaling, deviation);
+            negative += (outputs[2*n] < 0.0);
+            if (!(deviation <= 1e-14)) {
+                std::cout << "thermostat case " << n << " (K " << k.kinetic << ", Kbar " << k.target << ", N_f " << k.dof << ", c " << k.c
+                          << "): device alpha " << outputs[2*n] << ", K' " << outputs[2*n + 1] << "; host " << alpha << ", " << newKinetic
+                          << std::endl;
+                failures++;
+            }
+        }
+        if (negative < 3) {
+            std::cout << "the scalings through zero did not come out negative" << std::endl;
+            failures++;
+        }
+        std::cout << numCases << " thermostat factors agree with the host: largest relative deviation " << largestRescaling << std::endl;
         clReleaseProgram(program);
         clReleaseCommandQueue(queue);
         clReleaseContext(context);
         if (failures > 0) {
-            std::cout << failures << " bodies differ" << std::endl;
+            std::cout << failures << " cases differ" << std::endl;
             return 1;
         }
         std::cout << numBodies << " bodies x 6 drifts agree with the host: largest deviation " << largest

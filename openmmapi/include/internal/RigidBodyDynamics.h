@@ -61,7 +61,9 @@ public:
  *                        kick and velocity constraints. A kick of 0 reads no forces (the end of a
  *                        Langevin step, whose velocities are half a step behind the positions).
  *   thermalize(c, kT):   the exact Ornstein-Uhlenbeck step of the momenta (see below).
- *   scaleMomenta(a):     every momentum times a (a thermostat's rescaling, after the closing kick).
+ *   rescaleMomenta(...): the Bussi thermostat's step (after the closing kick): the kinetic energy,
+ *                        the factor alpha of eq. (A7) from the deviates given, every momentum times
+ *                        alpha (scaleMomenta(alpha)).
  *
  * Each is one pass over the bodies (on the threads, if there are any). Between them the body
  * momenta live in this class; the particle velocities of the bodies are written once per step.
@@ -144,6 +146,22 @@ public:
      * constraints among free particles stay satisfied.
      */
     void scaleMomenta(std::vector<OpenMM::Vec3>& velocities, double alpha);
+    /**
+     * One step of RigidBodyIntegrator's Bussi thermostat, after the closing kick: the kinetic energy
+     * K (computeKineticEnergies(), translation plus rotation), the factor alpha and the new kinetic
+     * energy K' from rigidStochasticRescaling() (numerics/core/CoreThermostat.h: Bussi, Donadio and
+     * Parrinello (2007), eqs. (A7) and (A8)) with the deviates given, then scaleMomenta(alpha).
+     *
+     * @param targetKinetic  Kbar = N_f kT/2, in kJ/mol
+     * @param dof            N_f, the number of degrees of freedom
+     * @param c              exp(-dt/tau)
+     * @param r1             R_1 of eq. (A7), a standard normal deviate
+     * @param rest           S of eq. (A7), a chi-squared deviate with N_f - 1 degrees of freedom
+     * @param kinetic        set to K, in kJ/mol
+     * @param newKinetic     set to K', in kJ/mol
+     */
+    void rescaleMomenta(std::vector<OpenMM::Vec3>& velocities, double targetKinetic, int dof, double c, double r1, double rest,
+                        double& kinetic, double& newKinetic);
     /**
      * The last kick of a step: kick every body and free particle by the forces, write the bodies'
      * rigid velocities to their particles and apply the velocity constraints of the free particles.

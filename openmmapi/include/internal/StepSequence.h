@@ -24,6 +24,13 @@ struct StepGeometry;
  */
 struct StepState {
     uint64_t seed = 0, randomCounter = 0;
+    /**
+     * The thermostat's work, in kJ/mol, up to the last time it was taken from the kernel, which sums
+     * it step by step where the momenta are (IntegrateRigidBodyStepKernel::rescaleMomenta()); what
+     * the kernel holds is added (to the heat too, while measured) before either is read, saved or
+     * reset (RigidBodyIntegratorBase::takeThermostatWork()), and dropped when a checkpoint replaces
+     * this state.
+     */
     double thermostatWork = 0.0;
     /** The energy change of the deterministic stages and of the stochastic ones, in kJ/mol, summed while measured. */
     double shadowWork = 0.0, heat = 0.0;
@@ -58,7 +65,8 @@ OPENMM_EXPORT_RIGID StepGeometry currentGeometry(OpenMM::ContextImpl& context, c
  *
  * Shadow work: the step's change of K + U before the rescaling, which is the sum over its kicks
  * (the kinetic energy they add) and drifts (the potential energy they add; an exact drift keeps the
- * kinetic energy). Heat: the kinetic energy the rescaling adds.
+ * kinetic energy). Heat: the kinetic energy the rescaling adds, which is the thermostat's work: the
+ * kernel sums both (the step reads nothing back unless it measures the shadow work).
  */
 OPENMM_EXPORT_RIGID void stepRigidBodyIntegrator(OpenMM::ContextImpl& context, IntegrateRigidBodyStepKernel& kernel,
         const RigidBodyIntegrator& integrator, const RigidBodySystem& bodies, StepState& state);

@@ -6,9 +6,10 @@
  *
  * The core is the one implementation of each formula the dynamics needs per body (the classification
  * of principal moments, the exact free rotor, NO_SQUISH, Philox and its normal deviates, and the
- * elliptic functions they rest on), written so that the same text compiles as C++ (this header), as
- * C99 (core/CorePreludeC.h, tested by tests/core/) and as OpenMM common-compute kernel source for
- * OpenCL and CUDA (core/CorePreludeCommon.h in front of the files). The rules its files follow:
+ * elliptic functions they rest on) and of the Bussi thermostat's factor given its deviates, written
+ * so that the same text compiles as C++ (this header), as C99 (core/CorePreludeC.h, tested by
+ * tests/core/) and as OpenMM common-compute kernel source for OpenCL and CUDA
+ * (core/CorePreludeCommon.h in front of the files). The rules its files follow:
  * - plain structs of doubles and ints with fixed-size arrays, functions that take pointers; no
  *   templates, overloads, references, namespaces, classes or std:: in the shared text;
  * - no allocation, no exceptions: a function that can fail returns a RigidStatus;
@@ -57,6 +58,7 @@ inline double rigidBitsDouble(RigidUInt64 bits) {
 #include "numerics/core/CoreRotor.h"
 #include "numerics/core/CoreNoSquish.h"
 #include "numerics/core/CorePhilox.h"
+#include "numerics/core/CoreThermostat.h"
 
 } // namespace OpenMMRigid
 

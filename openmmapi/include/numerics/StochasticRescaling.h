@@ -3,19 +3,10 @@
 
 /*
  * The stochastic velocity rescaling thermostat of G. Bussi, D. Donadio and M. Parrinello, J. Chem.
- * Phys. 126, 014101 (2007): the kinetic energy K of N_f degrees of freedom follows the stochastic
- * differential equation (their eq. (7))
- *
- *     dK = (Kbar - K) dt/tau + 2 sqrt(K Kbar/(N_f tau)) dW,    Kbar = N_f kT/2,
- *
- * whose stationary distribution is the canonical one of K, and the velocities are scaled by
- * alpha = sqrt(K'/K). Over a time t the exact solution is (their eq. (A7)), with c = exp(-t/tau),
- *
- *     K' = c K + (1 - c) Kbar (R_1^2 + S)/N_f + 2 R_1 sqrt(c (1 - c) K Kbar/N_f),
- *
- * R_1 a standard normal deviate and S a chi-squared deviate with N_f - 1 degrees of freedom (the sum
- * of N_f - 1 more squared normals); alpha takes the sign of R_1 + sqrt(c N_f K/((1 - c) Kbar)) (their
- * eq. (A8)), which is negative only in the rare case that the scaling passes through zero.
+ * Phys. 126, 014101 (2007): the random deviates of one step, R_1 and S of their eq. (A7), drawn on
+ * the host, and the factor alpha = sqrt(K'/K) from them. The arithmetic of eqs. (A7) and (A8) is the
+ * numerics core's rigidStochasticRescaling() (core/CoreThermostat.h, which states the equations), so
+ * that a device that holds the kinetic energy applies the same formula to deviates the host drew.
  *
  * Accuracy: exact to rounding. The chi-squared deviate is a sum of squares for up to 32 degrees of
  * freedom and 2 Gamma(n/2) by the exact rejection method of G. Marsaglia and W. W. Tsang, ACM Trans.
@@ -23,6 +14,7 @@
  */
 
 #include "numerics/Philox.h"
+#include "numerics/RigidCore.h"
 #include <cmath>
 
 namespace OpenMMRigid {
@@ -53,8 +45,29 @@ inline double chiSquaredDeviate(int n, NormalStream& random) {
 }
 
 /**
+ * The deviates of one step of the thermostat, which do not depend on the kinetic energy: R_1, a
+ * standard normal deviate, then S, a chi-squared deviate with N_f - 1 degrees of freedom (eq. (A7)),
+ * in that order from `random`. They are drawn whenever the step can scale at all (dof > 0 and c < 1);
+ * otherwise none is drawn and both are 0.
+ *
+ * @param dof     N_f, the number of degrees of freedom
+ * @param c       exp(-t/tau)
+ * @param random  the source of the deviates
+ * @param r1      set to R_1
+ * @param rest    set to S
+ */
+inline void stochasticRescalingDeviates(int dof, double c, NormalStream& random, double& r1, double& rest) {
+    r1 = rest = 0.0;
+    if (dof <= 0 || c >= 1.0)
+        return;
+    r1 = random.next();
+    rest = chiSquaredDeviate(dof - 1, random);
+}
+
+/**
  * The factor alpha by which the velocities are scaled in one step of the thermostat, and the new
- * kinetic energy alpha^2 K.
+ * kinetic energy alpha^2 K: the deviates from stochasticRescalingDeviates(), then
+ * rigidStochasticRescaling().
  *
  * @param kinetic        K, the kinetic energy now (> 0; for K = 0 nothing can be scaled and alpha is 1)
  * @param targetKinetic  Kbar = N_f kT/2 (>= 0; 0 damps: K' = c K)
@@ -65,22 +78,9 @@ inline double chiSquaredDeviate(int n, NormalStream& random) {
  */
 inline double stochasticRescalingFactor(double kinetic, double targetKinetic, int dof, double c, NormalStream& random,
                                         double& newKinetic) {
-    newKinetic = kinetic;
-    if (!(kinetic > 0.0) || dof <= 0 || c >= 1.0)
-        return 1.0;
-    // Both deviates are drawn in every case, so that the stream is used alike whatever the values.
-    const double r1 = random.next(), rest = chiSquaredDeviate(dof - 1, random);
-    if (targetKinetic <= 0.0) {
-        newKinetic = c*kinetic;
-        return std::sqrt(c);
-    }
-    // Bussi, Donadio and Parrinello (2007), eq. (A7).
-    newKinetic = c*kinetic + (1.0 - c)*targetKinetic*(r1*r1 + rest)/dof + 2.0*r1*std::sqrt(c*(1.0 - c)*kinetic*targetKinetic/dof);
-    double alpha = std::sqrt(newKinetic/kinetic);
-    // Eq. (A8): the sign of alpha.
-    if (r1 + std::sqrt(c*dof*kinetic/((1.0 - c)*targetKinetic)) < 0.0)
-        alpha = -alpha;
-    return alpha;
+    double r1, rest;
+    stochasticRescalingDeviates(dof, c, random, r1, rest);
+    return rigidStochasticRescaling(kinetic, targetKinetic, dof, c, r1, rest, &newKinetic);
 }
 
 } // namespace OpenMMRigid

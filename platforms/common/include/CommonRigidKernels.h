@@ -45,7 +45,9 @@ public:
     void thermalize(OpenMM::ContextImpl& context, double c, double kT, uint64_t seed, uint64_t counter,
                     double constraintTolerance) override;
     void writeBodyVelocities(OpenMM::ContextImpl& context) override;
-    void scaleMomenta(OpenMM::ContextImpl& context, double alpha) override;
+    void rescaleMomenta(OpenMM::ContextImpl& context, double targetKinetic, int dof, double c, double r1, double rest) override;
+    void getRescalingEnergies(OpenMM::ContextImpl& context, double& kinetic, double& newKinetic) override;
+    double takeThermostatWork(OpenMM::ContextImpl& context) override;
     void computeKineticEnergies(OpenMM::ContextImpl& context, double& translational, double& rotational) override;
     void computeKickedKineticEnergies(OpenMM::ContextImpl& context, double kick, double constraintTolerance, double& translational,
                                       double& rotational) override;

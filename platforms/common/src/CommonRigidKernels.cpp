@@ -129,9 +129,16 @@ struct CommonIntegrateRigidBodyStepKernel::Impl {
     Kernel stateData;
     ComputeArray bodyStart, bodyParticles, bodyCoordinates, bodyParticleMass, bodyMass, shapes, inertiaScale, freeParticles;
     ComputeArray currentIndex, states, writtenVelocities, errorCode, errorData, energies, sums;
+    /**
+     * The Bussi thermostat's last step, written by rigidSumPairs on the device: [0] alpha, [1] K,
+     * [2] K', [3] the work sum of K' - K since the host last took it.
+     */
+    ComputeArray rescaling;
+    /** Whether a rescaling ran since the work was last taken, and whether the device's sum holds only work already taken. */
+    bool workPending = false, restartWork = false;
     ComputeArray startStates, startPosq, startPosqCorrection, startVelm;
     ComputeKernel updateAtomOrder, recordVelocities, kickDrift, kickDriftFree, finishFreeDrift, closingKick, kickFree;
-    ComputeKernel thermalizeBodies, thermalizeFree, scaleBodies, scaleFree, kineticEnergies, sumPairs, fitTranslation;
+    ComputeKernel thermalizeBodies, thermalizeFree, scaleBodies, scaleFree, kineticEnergies, sumPairs, sumRescale, fitTranslation;
     ComputeKernel projectBodyVelocities, kickedKineticEnergies;
     /** The velocities while computeKickedKineticEnergies() kicks the free particles' (allocated on first use). */
     ComputeArray savedVelm;
@@ -408,6 +415,8 @@ void CommonIntegrateRigidBodyStepKernel::initialize(ContextImpl& context, RigidB
     d.statusRead = cc.createEvent();
     d.energies.initialize<double>(cc, 2*max(1, d.numBodies + d.numFree), "rigidKineticEnergies");
     d.sums.initialize<double>(cc, 2, "rigidKineticEnergySums");
+    d.rescaling.initialize<double>(cc, 4, "rigidRescaling");
+    d.rescaling.upload(vector<double>{1.0, 0.0, 0.0, 0.0});
     d.startPosq.initialize(cc, cc.getPosq().getSize(), cc.getPosq().getElementSize(), "rigidStartPosq");
     if (cc.getUseMixedPrecision())
         d.startPosqCorrection.initialize(cc, cc.getPosqCorrection().getSize(), cc.getPosqCorrection().getElementSize(),
@@ -510,14 +519,14 @@ void CommonIntegrateRigidBodyStepKernel::initialize(ContextImpl& context, RigidB
     d.scaleBodies->addArg(d.numBodies);
     for (ArrayInterface* array : initializer_list<ArrayInterface*>{&d.bodyStart, &d.bodyParticles, &d.currentIndex, &d.states, &d.writtenVelocities, &velm})
         d.scaleBodies->addArg(*array);
-    d.scaleBodies->addArg();  // alpha (7)
+    d.scaleBodies->addArg(d.rescaling);
 
     d.scaleFree = program->createKernel("rigidScaleFree");
     d.scaleFree->addArg(d.numFree);
     d.scaleFree->addArg(d.freeParticles);
     d.scaleFree->addArg(d.currentIndex);
     d.scaleFree->addArg(velm);
-    d.scaleFree->addArg();  // alpha (4)
+    d.scaleFree->addArg(d.rescaling);
 
     d.kineticEnergies = program->createKernel("rigidKineticEnergies");
     d.kineticEnergies->addArg(d.numBodies);
@@ -536,10 +545,22 @@ void CommonIntegrateRigidBodyStepKernel::initialize(ContextImpl& context, RigidB
     d.kickedKineticEnergies->addArg(d.energies);
     d.kickedKineticEnergies->addArg();  // kick (14)
 
+    // The same kernel twice: the plain sums, and the sums with the thermostat's step after them.
     d.sumPairs = program->createKernel("rigidSumPairs");
-    d.sumPairs->addArg(d.numBodies + d.numFree);
-    d.sumPairs->addArg(d.energies);
-    d.sumPairs->addArg(d.sums);
+    d.sumRescale = program->createKernel("rigidSumPairs");
+    for (ComputeKernel* kernel : {&d.sumPairs, &d.sumRescale}) {
+        (*kernel)->addArg(d.numBodies + d.numFree);
+        (*kernel)->addArg(d.energies);
+        (*kernel)->addArg(d.sums);
+        (*kernel)->addArg(kernel == &d.sumRescale ? 1 : 0);  // rescale
+        (*kernel)->addArg(0.0);                              // targetKinetic (4)
+        (*kernel)->addArg(0);                                // dof (5)
+        (*kernel)->addArg(1.0);                              // c (6)
+        (*kernel)->addArg(0.0);                              // r1 (7)
+        (*kernel)->addArg(0.0);                              // rest (8)
+        (*kernel)->addArg(0);                                // restartWork (9)
+        (*kernel)->addArg(d.rescaling);
+    }
 
     d.projectionFailed.initialize<int>(cc, 2, "rigidProjectionFailed");
     d.fitTranslation = program->createKernel("rigidFitTranslation");
@@ -776,17 +797,50 @@ void CommonIntegrateRigidBodyStepKernel::writeBodyVelocities(ContextImpl& contex
     }
 }
 
-void CommonIntegrateRigidBodyStepKernel::scaleMomenta(ContextImpl& context, double alpha) {
+void CommonIntegrateRigidBodyStepKernel::rescaleMomenta(ContextImpl& context, double targetKinetic, int dof, double c, double r1,
+                                                        double rest) {
     Impl& d = *impl;
     ContextSelector selector(cc);
-    if (d.numBodies > 0) {
-        d.scaleBodies->setArg(7, alpha);
+    if (d.numBodies + d.numFree == 0)
+        return;
+    // The kinetic energies, their sum and the factor (rigidSumPairs' thread 0), the scaling: all on
+    // the device, the factor read there by the scaling kernels.
+    d.kineticEnergies->execute(d.numBodies + d.numFree);
+    d.sumRescale->setArg(4, targetKinetic);
+    d.sumRescale->setArg(5, dof);
+    d.sumRescale->setArg(6, c);
+    d.sumRescale->setArg(7, r1);
+    d.sumRescale->setArg(8, rest);
+    d.sumRescale->setArg(9, d.restartWork ? 1 : 0);
+    d.sumRescale->execute(sumThreads, sumThreads);
+    d.restartWork = false;
+    d.workPending = true;
+    if (d.numBodies > 0)
         d.scaleBodies->execute(d.numBodies);
-    }
-    if (d.numFree > 0) {
-        d.scaleFree->setArg(4, alpha);
+    if (d.numFree > 0)
         d.scaleFree->execute(d.numFree);
-    }
+}
+
+void CommonIntegrateRigidBodyStepKernel::getRescalingEnergies(ContextImpl& context, double& kinetic, double& newKinetic) {
+    Impl& d = *impl;
+    ContextSelector selector(cc);
+    vector<double> values;
+    d.rescaling.download(values);
+    kinetic = values[1];
+    newKinetic = values[2];
+}
+
+double CommonIntegrateRigidBodyStepKernel::takeThermostatWork(ContextImpl& context) {
+    Impl& d = *impl;
+    if (!d.workPending)
+        return 0.0;
+    ContextSelector selector(cc);
+    vector<double> values;
+    d.rescaling.download(values);
+    // The next rescaling starts the device's sum again (an argument, not a write, so nothing waits for it).
+    d.workPending = false;
+    d.restartWork = true;
+    return values[3];
 }
 
 void CommonIntegrateRigidBodyStepKernel::computeKineticEnergies(ContextImpl& context, double& translational, double& rotational) {

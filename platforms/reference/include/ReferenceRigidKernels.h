@@ -32,7 +32,9 @@ public:
     void closingKick(OpenMM::ContextImpl& context, double kick, double constraintTolerance);
     void thermalize(OpenMM::ContextImpl& context, double c, double kT, uint64_t seed, uint64_t counter, double constraintTolerance);
     void writeBodyVelocities(OpenMM::ContextImpl& context);
-    void scaleMomenta(OpenMM::ContextImpl& context, double alpha);
+    void rescaleMomenta(OpenMM::ContextImpl& context, double targetKinetic, int dof, double c, double r1, double rest);
+    void getRescalingEnergies(OpenMM::ContextImpl& context, double& kinetic, double& newKinetic);
+    double takeThermostatWork(OpenMM::ContextImpl& context);
     void computeKineticEnergies(OpenMM::ContextImpl& context, double& translational, double& rotational);
     void computeKickedKineticEnergies(OpenMM::ContextImpl& context, double kick, double constraintTolerance, double& translational,
                                       double& rotational);
@@ -46,6 +48,8 @@ private:
     std::vector<OpenMM::Vec3> writtenPositions;
     /** The velocities a step starts from (for abandonStep()). */
     std::vector<OpenMM::Vec3> startVelocities;
+    /** The kinetic energies before and after the last rescaleMomenta(), and the work K' - K summed since the last takeThermostatWork(). */
+    double rescalingKinetic = 0.0, rescalingNewKinetic = 0.0, thermostatWork = 0.0;
 };
 
 } // namespace OpenMMRigid

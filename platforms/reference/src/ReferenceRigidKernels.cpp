@@ -128,8 +128,21 @@ void ReferenceIntegrateRigidBodyStepKernel::writeBodyVelocities(ContextImpl& con
     dynamics->writeBodyVelocities(extractPositions(context), extractVelocities(context));
 }
 
-void ReferenceIntegrateRigidBodyStepKernel::scaleMomenta(ContextImpl& context, double alpha) {
-    dynamics->scaleMomenta(extractVelocities(context), alpha);
+void ReferenceIntegrateRigidBodyStepKernel::rescaleMomenta(ContextImpl& context, double targetKinetic, int dof, double c, double r1,
+                                                           double rest) {
+    dynamics->rescaleMomenta(extractVelocities(context), targetKinetic, dof, c, r1, rest, rescalingKinetic, rescalingNewKinetic);
+    thermostatWork += rescalingNewKinetic - rescalingKinetic;
+}
+
+void ReferenceIntegrateRigidBodyStepKernel::getRescalingEnergies(ContextImpl& context, double& kinetic, double& newKinetic) {
+    kinetic = rescalingKinetic;
+    newKinetic = rescalingNewKinetic;
+}
+
+double ReferenceIntegrateRigidBodyStepKernel::takeThermostatWork(ContextImpl& context) {
+    const double work = thermostatWork;
+    thermostatWork = 0.0;
+    return work;
 }
 
 void ReferenceIntegrateRigidBodyStepKernel::computeKineticEnergies(ContextImpl& context, double& translational, double& rotational) {

@@ -491,10 +491,14 @@ KERNEL void rigidThermalizeFree(int numFree, int numBodies, GLOBAL const int* RE
     }
 }
 
-/* RigidBodyDynamics::scaleMomenta for the bodies: V, L and the body particles' velocities times alpha. */
+/*
+ * RigidBodyDynamics::scaleMomenta for the bodies: V, L and the body particles' velocities times
+ * alpha = rescaling[0], the factor rigidSumPairs computed on the device.
+ */
 KERNEL void rigidScaleMomenta(int numBodies, GLOBAL const int* RESTRICT bodyStart, GLOBAL const int* RESTRICT bodyParticles,
         GLOBAL const int* RESTRICT currentIndex, GLOBAL double* RESTRICT states, GLOBAL double* RESTRICT writtenVelocities,
-        GLOBAL mixed4* RESTRICT velm, double alpha) {
+        GLOBAL mixed4* RESTRICT velm, GLOBAL const double* RESTRICT rescaling) {
+    const double alpha = rescaling[0];
     for (int b = GLOBAL_ID; b < numBodies; b += GLOBAL_SIZE) {
         int i, k;
         for (k = 0; k < 3; k++) {
@@ -517,7 +521,8 @@ KERNEL void rigidScaleMomenta(int numBodies, GLOBAL const int* RESTRICT bodyStar
 }
 
 KERNEL void rigidScaleFree(int numFree, GLOBAL const int* RESTRICT freeParticles, GLOBAL const int* RESTRICT currentIndex,
-        GLOBAL mixed4* RESTRICT velm, double alpha) {
+        GLOBAL mixed4* RESTRICT velm, GLOBAL const double* RESTRICT rescaling) {
+    const double alpha = rescaling[0];
     for (int j = GLOBAL_ID; j < numFree; j += GLOBAL_SIZE) {
         const int index = currentIndex[freeParticles[j]];
         double v[3];
@@ -622,8 +627,15 @@ KERNEL void rigidKickedKineticEnergies(int numBodies, int numFree, GLOBAL const 
     }
 }
 
-/* sums[0] = sum of values[2 j], sums[1] = sum of values[2 j + 1]: one work group of RIGID_SUM_THREADS threads. */
-KERNEL void rigidSumPairs(int count, GLOBAL const double* RESTRICT values, GLOBAL double* RESTRICT sums) {
+/*
+ * sums[0] = sum of values[2 j], sums[1] = sum of values[2 j + 1]: one work group of RIGID_SUM_THREADS
+ * threads. If rescale, the sums are the kinetic energy K (translation plus rotation) of a step of the
+ * Bussi thermostat, and thread 0 applies rigidStochasticRescaling() to it with the deviates the host
+ * drew: rescaling[0] = alpha (which rigidScaleMomenta and rigidScaleFree read), [1] = K, [2] = K',
+ * and [3], the thermostat's work, += K' - K (from 0 if restartWork: the host has taken the sum).
+ */
+KERNEL void rigidSumPairs(int count, GLOBAL const double* RESTRICT values, GLOBAL double* RESTRICT sums, int rescale,
+        double targetKinetic, int dof, double c, double r1, double rest, int restartWork, GLOBAL double* RESTRICT rescaling) {
     LOCAL double first[RIGID_SUM_THREADS];
     LOCAL double second[RIGID_SUM_THREADS];
     double a = 0.0, b = 0.0;
@@ -644,6 +656,15 @@ KERNEL void rigidSumPairs(int count, GLOBAL const double* RESTRICT values, GLOBA
     if (LOCAL_ID == 0) {
         sums[0] = first[0];
         sums[1] = second[0];
+        if (rescale) {
+            /* K as RigidBodyDynamics::rescaleMomenta sums it: translation + rotation */
+            const double kinetic = first[0] + second[0];
+            double newKinetic;
+            rescaling[0] = rigidStochasticRescaling(kinetic, targetKinetic, dof, c, r1, rest, &newKinetic);
+            rescaling[1] = kinetic;
+            rescaling[2] = newKinetic;
+            rescaling[3] = (restartWork ? 0.0 : rescaling[3]) + (newKinetic - kinetic);
+        }
     }
 }
 
