@@ -411,6 +411,11 @@ private:
      * box now.
      */
     bool makeBodiesCurrent(OpenMM::Vec3* box);
+    /**
+     * Evaluate the integration force groups' forces (and, if asked, their energy, kept as the step
+     * state's potential energy) at the current positions and box, and record them as current.
+     */
+    void evaluateForces(const OpenMM::Vec3* box, bool energy);
     std::string className;
     std::vector<std::vector<int> > bodies;
     bool explicitBodies;

@@ -540,17 +540,20 @@ bool RigidBodyIntegratorBase::makeBodiesCurrent(Vec3* box) {
     return forcesAreValid;
 }
 
+void RigidBodyIntegratorBase::evaluateForces(const Vec3* box, bool energy) {
+    stepState.potentialEnergy = context->calcForcesAndEnergy(true, energy, getIntegrationForceGroups());
+    stepState.potentialKnown = energy;
+    forcesAreValid = true;
+    for (int k = 0; k < 3; k++)
+        forcesBox[k] = box[k];
+}
+
 double RigidBodyIntegratorBase::computeKickedKineticEnergy(double kick, const string& method) {
     if (!bound)
         throw OpenMMException(className + "." + method + ": the integrator is not bound to a Context");
     Vec3 box[3];
-    if (!makeBodiesCurrent(box)) {
-        context->calcForcesAndEnergy(true, false, getIntegrationForceGroups());
-        stepState.potentialKnown = false;
-        forcesAreValid = true;
-        for (int k = 0; k < 3; k++)
-            forcesBox[k] = box[k];
-    }
+    if (!makeBodiesCurrent(box))
+        evaluateForces(box, false);
     double translational, rotational;
     getKernel().computeKickedKineticEnergies(*context, kick, getConstraintTolerance(), translational, rotational);
     return translational + rotational;
@@ -593,10 +596,8 @@ void RigidBodyIntegratorBase::step(int steps) {
         else
             checkingStep = false;
         const bool measure = measuresShadowWork();
-        if (!forcesAreValid || (measure && !stepState.potentialKnown)) {
-            stepState.potentialEnergy = context->calcForcesAndEnergy(true, measure, getIntegrationForceGroups());
-            stepState.potentialKnown = measure;
-        }
+        if (!forcesAreValid || (measure && !stepState.potentialKnown))
+            evaluateForces(box, measure);
         try {
             executeStep(*context);
         }

@@ -182,6 +182,14 @@ struct CommonIntegrateRigidBodyStepKernel::Impl {
     }
     /** Throws the message of a failed stage if code says one failed (and clears the device's status). */
     void throwIfFailed(int code);
+    /** The sums of the per-body energies a kernel wrote (rigidSumPairs, then a read): translation and the rest. */
+    void sumEnergies(double& translational, double& rotational) {
+        sumPairs->execute(sumThreads, sumThreads);
+        vector<double> values;
+        sums.download(values);
+        translational = values[0];
+        rotational = values[1];
+    }
     /** Waits for the status copied in beforeLastForces() (queued before the forces) and throws if a stage failed. */
     void checkStatus() {
         if (!statusPending)
@@ -850,11 +858,7 @@ void CommonIntegrateRigidBodyStepKernel::computeKineticEnergies(ContextImpl& con
     if (d.numBodies + d.numFree == 0)
         return;
     d.kineticEnergies->execute(d.numBodies + d.numFree);
-    d.sumPairs->execute(sumThreads, sumThreads);
-    vector<double> sums;
-    d.sums.download(sums);
-    translational = sums[0];
-    rotational = sums[1];
+    d.sumEnergies(translational, rotational);
 }
 
 void CommonIntegrateRigidBodyStepKernel::computeKickedKineticEnergies(ContextImpl& context, double kick, double constraintTolerance,
@@ -876,13 +880,9 @@ void CommonIntegrateRigidBodyStepKernel::computeKickedKineticEnergies(ContextImp
     }
     d.kickedKineticEnergies->setArg(14, kick);
     d.kickedKineticEnergies->execute(d.numBodies + d.numFree);
-    d.sumPairs->execute(sumThreads, sumThreads);
+    d.sumEnergies(translational, rotational);
     if (d.numFree > 0)
         d.savedVelm.copyTo(cc.getVelm());
-    vector<double> sums;
-    d.sums.download(sums);
-    translational = sums[0];
-    rotational = sums[1];
 }
 
 double CommonIntegrateRigidBodyStepKernel::computeKineticEnergy(ContextImpl& context) {
