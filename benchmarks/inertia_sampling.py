@@ -31,11 +31,16 @@ lags of 1 and 5 ps, / 6), the rotational correlation time tau_1 of the molecular
 (C_1(t) = <u(0).u(t)>, exponential fit where 0.15 < C_1 < 0.85), and the integrated autocorrelation
 time tau_U of U (samples 0.1 ps apart; Sokal's window, c = 5). ns/day is timed at the integer step
 below the accurate step, every configuration in turn in one process (`--timing-repetitions` blocks of
-`--timing-steps` steps, medians). Effective samples per wall-hour: simulated ps per hour / (2 tau_U).
+`--timing-steps` steps in each of `--timing-contexts` Contexts per configuration, medians of the
+pooled blocks). A rigid configuration's step is timed twice, with the accuracy check
+paused and in one of its episodes (which also evaluate the energy), and weighted as a long run spends
+its steps (benchmarking.checkDuty(): 10 % of them at 2 to 10 fs, 15 % at 16 fs); a fresh Context's
+first picoseconds are all episode. Effective samples per wall-hour: simulated ps per hour / (2 tau_U).
 
     python benchmarks/inertia_sampling.py --quick                  # smoke check, about 5 minutes
     python benchmarks/inertia_sampling.py --systems tip3p-nvt --starts 2 --threads 2
     python benchmarks/inertia_sampling.py --report                 # the report from the saved systems
+    python benchmarks/inertia_sampling.py --retime --systems tip3p-npt --threads 2   # new timing, same sampling
 
 Results: benchmarks/results/inertia_sampling/<mode>/<system>.json and a log; a full run writes
 docs/results/inertia_sampling.md and docs/figures/inertia_sampling_<system>.png.
@@ -51,8 +56,8 @@ import openmm
 from openmm import app, unit
 
 import openmmrigid
-from benchmarking import (RESULTS as BENCHMARK_RESULTS, Progress, ResultsDocument, blockMean, header, nsPerDay, openLog,
-                          pyplot, say, stamp, timeInterleaved)
+from benchmarking import (RESULTS as BENCHMARK_RESULTS, Progress, ResultsDocument, blockMean, checkDuty, episodeTwin, header,
+                          nsPerDay, openLog, productionSeconds, pyplot, say, stamp, timeInterleaved, TimingFailure)
 from nvt_accuracy import (AMU_PER_NM3_IN_G_PER_ML, BOLTZMANN, FRICTION, SYSTEMS, TEMPERATURE, buildModel,
                           equilibrate, stockDegreesOfFreedom, withoutBarostat)
 
@@ -278,6 +283,21 @@ def runSystem(name, args, platform, properties):
     return result
 
 
+def retimeSystem(name, args, platform, properties):
+    """The saved result of a system with its timing measured again (the system built and equilibrated as
+    for its runs; the sampling and its analysis are kept)."""
+    result = json.loads((args.folder/f"{name}.json").read_text())
+    spec = SYSTEMS[name]
+    topology, positions, nptSystem = buildModel(spec["model"], spec["protein"])
+    stamp(f"{name}: timing again; minimizing and equilibrating {args.equilibrate:g} ps (stock, 2 fs)")
+    state = equilibrate(nptSystem, positions, platform, properties, args.equilibrate)
+    system = nptSystem if spec["npt"] else withoutBarostat(nptSystem)
+    analyse(result)
+    timing(result, system, heavyHydrogens(system, topology), state, result["configs"], platform, properties, args)
+    result["retimed"] = header(platform.getName(), args.threads or None)
+    return result
+
+
 def pooled(runs, key):
     """Mean over the starts of a run's (mean, error) and the combined error."""
     values = [run[key] for run in runs]
@@ -316,6 +336,10 @@ def analyse(result):
             for key in ("D", "tauRot", "tauU"):
                 entry[key] = float(np.mean([r[key] for r in done]))
             points.append(entry)
+        # A step that failed while it was timed (timing()) is not stable from every start either.
+        failedTiming = min(result.get("timingFailures", {}).get(label, []), default=None)
+        if failedTiming is not None:
+            points = [p for p in points if p["step"] < failedTiming]
         largestStable = points[-1]["step"] if points else None
         # A step whose bias is beyond the tolerance by more than 2 standard errors is clearly inaccurate:
         # it and the larger ones bound the accurate range and stay out of the fit (an error of several
@@ -359,30 +383,71 @@ def accurateStep(fit, points, tolerance):
 
 
 def timing(result, system, heavy, state, configs, platform, properties, args):
-    """ns/day of each configuration at the integer step at or below its accurate step, interleaved."""
-    integrators, contexts = {}, []
-    for label, config in configs.items():
-        step = result["summary"][label]["accurateStep"]
-        if not step:
-            continue
-        step = int(np.floor(step))
-        integrator = makeIntegrator(config, step, 5)
+    """ns/day of each configuration at the integer step at or below its accurate step, interleaved. A
+    rigid configuration is timed as a long run spends its steps: outside the accuracy check's episodes
+    and in them, weighted by the check's duty at that step (benchmarking.productionSeconds())."""
+    while True:
+        try:
+            return timeOnce(result, system, heavy, state, configs, platform, properties, args)
+        except TimingFailure as failure:
+            # A step that fails within the timing's few hundred steps from a fresh start is not one a
+            # user can run: it counts as a start that did not run stably (analyse()), and the timing
+            # starts again with that configuration's accurate step below it.
+            label, step, _ = failure.label
+            label = label.replace(" (episode)", "")
+            say(f"  {label} at {step} fs: unstable while timed ({str(failure.error)[:90]}); its accurate step is now below")
+            result.setdefault("timingFailures", {}).setdefault(label, []).append(step)
+            analyse(result)
+
+
+def timeOnce(result, system, heavy, state, configs, platform, properties, args):
+    # Each configuration in --timing-contexts Contexts of their own (velocities drawn with their own
+    # seeds), their blocks pooled: two Contexts of one configuration, timed side by side, differ by up
+    # to 4 % on this machine (the layout each one's memory and neighbour list happen to get), which one
+    # Context per configuration would put into the ratios.
+    integrators, contexts, twins = {}, [], {}
+
+    def bind(key, integrator, config, seed):
         context = openmm.Context(heavy if config[2] else system, integrator, platform, properties)
         context.setState(state)
         # Velocities for this configuration's masses and moments, as in its runs: the start's, drawn
         # for the particles' own, would give raised moments a rotation I'/I times too hot, which a
         # step near the largest stable one does not survive.
-        context.setVelocitiesToTemperature(TEMPERATURE, 5)
-        integrators[(label, step)] = integrator
+        context.setVelocitiesToTemperature(TEMPERATURE, seed)
+        integrators[key] = integrator
         contexts.append(context)
+
+    for label, config in configs.items():
+        step = result["summary"][label]["accurateStep"]
+        if not step:
+            continue
+        step = int(np.floor(step))
+        for copy in range(args.timing_contexts):
+            seed = 5 + copy
+            integrator = makeIntegrator(config, step, seed)
+            if config[1]:
+                twins[(label, step, copy)] = (label + " (episode)", step, copy)
+                bind(twins[(label, step, copy)], episodeTwin(integrator), config, seed)
+            bind((label, step, copy), integrator, config, seed)
     wall, _ = timeInterleaved(integrators, args.timing_steps, args.timing_repetitions)
-    for (label, step), seconds in wall.items():
+    result["timed"] = {}
+    for label, config in configs.items():
+        keys = [key for key in wall if key[0] == label]
+        if not keys:
+            continue
+        step = keys[0][1]
         entry = result["summary"][label]
-        entry["timedStep"] = step
-        entry["msPerStep"] = 1000*float(np.median(seconds))
-        entry["nsPerDay"] = nsPerDay(step, float(np.median(seconds)))
-        result.setdefault("timed", {})[label] = dict(step=step, msPerStep=entry["msPerStep"])
-        say(f"  {label} at {step} fs: {entry['msPerStep']:.2f} ms/step, {entry['nsPerDay']:.1f} ns/day")
+        paused = float(np.median([t for key in keys for t in wall[key]]))
+        timed = dict(step=step, msPerStep=1000*paused, contexts=len(keys), blocks=len(keys)*args.timing_repetitions)
+        if config[1]:
+            episode = float(np.median([t for key in keys for t in wall[twins[key]]]))
+            timed.update(msPerStep=1000*productionSeconds(paused, episode, step), msPaused=1000*paused, msEpisode=1000*episode,
+                         checkDuty=checkDuty(step))
+        entry.update(timedStep=step, msPerStep=timed["msPerStep"], nsPerDay=nsPerDay(step, timed["msPerStep"]/1000))
+        result["timed"][label] = timed
+        say(f"  {label} at {step} fs: {entry['msPerStep']:.2f} ms/step, {entry['nsPerDay']:.1f} ns/day"
+            + (f" (check paused {timed['msPaused']:.2f}, in an episode {timed['msEpisode']:.2f} ms, "
+               f"{100*timed['checkDuty']:.0f} % of the steps)" if "msPaused" in timed else ""))
 
 
 def perWallHour(entry):
@@ -456,6 +521,18 @@ def report(results, quick):
         document.table(["configuration", "accurate step (fit, fs)", "2-sigma rule (fs)", "timed at (fs)", "ms/step", "ns/day",
                         "vs stock", "vs stock heavy-H", "D / tau_1 / tau_U (mean of runs to that step)",
                         "per wall-hour vs stock: U samples / D t / rotations"], rows)
+        if result.get("timingFailures"):
+            document.text("Unstable while timed (a fresh start, a few hundred steps), so not counted as stable from every "
+                          "start: " + "; ".join(f"{label} at {', '.join(f'{s:g}' for s in steps)} fs"
+                                                for label, steps in result["timingFailures"].items()) + ".")
+        split = {label: t for label, t in result.get("timed", {}).items() if "msPaused" in t}
+        if split:
+            document.text("ms/step of a rigid configuration is that of a long run with the accuracy check on (its default): "
+                          "the cost of a step outside the check's episodes and of one in them, weighted by the share of "
+                          "steps the check measures (benchmarking.checkDuty()); "
+                          + "; ".join(f"{label} {t['msPaused']:.2f} and {t['msEpisode']:.2f} ms, {100*t['checkDuty']:.0f} %"
+                                      for label, t in split.items())
+                          + (". Timed again: " + "; ".join(result["retimed"]) if result.get("retimed") else "") + ".")
         figure = plot(result, document.figurePath(f"inertia_sampling_{result['name']}.png"))
         if figure:
             document.figure(figure, f"{result['title']}: bias of U against step, and ns/day at the accurate step")
@@ -507,8 +584,11 @@ def main():
     parser.add_argument("--threads", type=int, default=0)
     parser.add_argument("--timing-steps", type=int, default=100)
     parser.add_argument("--timing-repetitions", type=int, default=7)
+    parser.add_argument("--timing-contexts", type=int, default=2, help="Contexts timed per configuration, pooled")
     parser.add_argument("--quick", action="store_true", help="a smoke check: short runs, few steps, one start")
     parser.add_argument("--report", action="store_true", help="only write the report from the saved systems")
+    parser.add_argument("--retime", action="store_true",
+                        help="time the saved systems of --systems again (their sampling kept), then write the report")
     args = parser.parse_args()
     if args.quick:
         args.starts, args.time, args.discard, args.equilibrate = 1, 2.0, 0.5, 2.0
@@ -516,11 +596,11 @@ def main():
     folder = args.folder = RESULTS/("quick" if args.quick else "full")
     folder.mkdir(parents=True, exist_ok=True)
     if not args.report:
-        openLog(folder/"log.txt")
+        openLog(folder/("retime.txt" if args.retime else "log.txt"))
         platform = openmm.Platform.getPlatformByName(args.platform)
         properties = {"Threads": str(args.threads)} if args.platform == "CPU" and args.threads else {}
         for name in args.systems:
-            result = runSystem(name, args, platform, properties)
+            result = retimeSystem(name, args, platform, properties) if args.retime else runSystem(name, args, platform, properties)
             (folder/f"{name}.json").write_text(json.dumps(result, indent=1))
     results = [json.loads(path.read_text()) for path in sorted(folder.glob("*.json"))]
     report(results, args.quick)
