@@ -8,7 +8,11 @@ Systems: those of benchmarks/nvt_accuracy.py (500 rigid waters, amber14 TIP3P or
 ewaldErrorTolerance 5e-4, CMMotionRemover, 300 K, friction 1/ps; NPT: MonteCarloBarostat, 1 bar,
 every 25 steps; "protein": alanine dipeptide among the 500 TIP3P waters, amber14, HBonds, HMR 3 amu,
 NPT, whose bonds cap every configuration's step, so all run at 2 to 5 fs and U is the whole system's
-per water), built, minimized and equilibrated as there. Each of `--starts` independent starts
+per water), built, minimized and equilibrated as there; and "rigid-solute", the same peptide and waters
+with the peptide one rigid body for the rigid integrator (rigidBodiesFromTopology with mergeBonded,
+removeIntraBodyInteractions: a rigid small molecule among rigid waters, its shape that of the
+equilibrated state) while stock runs it flexible as above, capped at 5 fs. Those are two models: each
+family's bias is taken against its own 2 fs runs, and the rigid integrator's starts are its own. Each of `--starts` independent starts
 continues that state for 3 ps with stock at 2 fs and its own seed (start 0: the state itself); from
 each start, every configuration runs at each of its steps, with velocities drawn for its own masses and
 moments (setVelocitiesToTemperature): `--discard` ps discarded, then `--time` ps
@@ -39,6 +43,7 @@ first picoseconds are all episode. Effective samples per wall-hour: simulated ps
 
     python benchmarks/inertia_sampling.py --quick                  # smoke check, about 5 minutes
     python benchmarks/inertia_sampling.py --systems tip3p-nvt --starts 2 --threads 2
+    python benchmarks/inertia_sampling.py --systems rigid-solute --starts 2 --floors 0.04 --threads 2
     python benchmarks/inertia_sampling.py --report                 # the report from the saved systems
     python benchmarks/inertia_sampling.py --retime --systems tip3p-npt --threads 2   # new timing, same sampling
 
@@ -58,7 +63,7 @@ from openmm import app, unit
 import openmmrigid
 from benchmarking import (RESULTS as BENCHMARK_RESULTS, Progress, ResultsDocument, blockMean, checkDuty, episodeTwin, header,
                           nsPerDay, openLog, productionSeconds, pyplot, say, stamp, timeInterleaved, TimingFailure)
-from nvt_accuracy import (AMU_PER_NM3_IN_G_PER_ML, BOLTZMANN, FRICTION, SYSTEMS, TEMPERATURE, buildModel,
+from nvt_accuracy import (AMU_PER_NM3_IN_G_PER_ML, BOLTZMANN, FRICTION, SYSTEMS as NVT_SYSTEMS, TEMPERATURE, buildModel,
                           equilibrate, stockDegreesOfFreedom, withoutBarostat)
 
 RESULTS = BENCHMARK_RESULTS/"inertia_sampling"
@@ -67,11 +72,21 @@ HEAVY_HYDROGEN = 4.0        # amu: water hydrogens for stock's mass repartitioni
 # The peptide (alanine dipeptide, HBonds, HMR 3 amu, NPT: nvt_accuracy's "protein"): both stock and the
 # rigid integrator fail at 6 fs there (docs/results/nvt_accuracy.md), whatever the waters' masses and moments.
 PEPTIDE_STEPS = [2, 3, 4, 5]
+# "rigid-solute": the same peptide and waters, but for the rigid integrator the peptide is one rigid
+# body (rigidBodiesFromTopology with mergeBonded, removeIntraBodyInteractions: examples/rigid_solute.py),
+# a rigid small molecule among rigid waters; stock runs the peptide as a user of stock must, flexible
+# with HBonds and HMR, at the steps the peptide allows it. The two are different models, so each
+# family's bias is taken against its own 2 fs runs (analyse()).
+SOLUTE_RESIDUES = ["ACE", "ALA", "NME"]
+SYSTEMS = dict(NVT_SYSTEMS, **{"rigid-solute": dict(
+    model="tip3p", npt=True, protein=True, rigidSolute=True,
+    title="alanine dipeptide in 500 TIP3P waters, NPT: one rigid body for the rigid integrator; flexible, HBonds, HMR 3 amu for stock")})
 
 
-def configurations(floors, quick, protein=False):
+def configurations(floors, quick, protein=False, rigidSolute=False):
     """label -> (description, rigid, heavy hydrogens, minimum moment, steps in fs). With the peptide
-    every configuration takes the steps of PEPTIDE_STEPS: its bonds cap the step, whatever the waters do."""
+    every configuration takes the steps of PEPTIDE_STEPS: its bonds cap the step, whatever the waters do;
+    with the rigid solute only stock's do (the rigid integrator's peptide has no bonds left)."""
     result = {
         "stock": ("LangevinMiddleIntegrator + SETTLE", False, False, 0.0, [2, 4, 6, 8, 10]),
         "stock-heavy": (f"LangevinMiddleIntegrator + SETTLE, water H {HEAVY_HYDROGEN:g} amu", False, True, 0.0, [4, 8, 10, 12, 14]),
@@ -80,11 +95,11 @@ def configurations(floors, quick, protein=False):
     for floor in floors:
         result[f"raised-{floor:g}"] = (f"RigidBodyLangevinIntegrator, moments >= {floor:g} amu nm^2", True, False, floor,
                                        [4, 8, 12, 14, 16, 18])
-    if protein:
-        result = {label: spec[:4] + (list(PEPTIDE_STEPS),) for label, spec in result.items()}
+    capped = lambda spec: protein and not (rigidSolute and spec[1])
+    result = {label: spec[:4] + (list(PEPTIDE_STEPS),) if capped(spec) else spec for label, spec in result.items()}
     if quick:
-        kept = (2, 4) if protein else (2, 8, 12)
-        result = {label: spec[:4] + ([s for s in spec[4] if s in kept] or spec[4][:1],) for label, spec in result.items()}
+        kept = lambda spec: (2, 4) if capped(spec) else (2, 8, 12)
+        result = {label: spec[:4] + ([s for s in spec[4] if s in kept(spec)] or spec[4][:1],) for label, spec in result.items()}
     return result
 
 
@@ -104,11 +119,33 @@ def heavyHydrogens(system, topology):
     return copy
 
 
-def makeIntegrator(spec, stepFs, seed):
+class Models:
+    """The Systems of one system's configurations: stock's (standard and heavy-hydrogen water) and the
+    rigid integrator's, the same System or, for the rigid solute, the System without the terms inside
+    its bodies (every water and the peptide), with those bodies."""
+
+    def __init__(self, system, topology, rigidSolute):
+        self.system, self.heavy, self.rigid, self.bodies = system, heavyHydrogens(system, topology), system, None
+        if rigidSolute:
+            self.bodies = openmmrigid.rigidBodiesFromTopology(topology, SOLUTE_RESIDUES + ["HOH"], mergeBonded=True,
+                                                              system=system)
+            self.rigid = openmmrigid.removeIntraBodyInteractions(system, self.bodies)
+            last = lambda s: type(s.getForce(s.getNumForces() - 1)).__name__
+            assert last(self.rigid) == last(system), "the barostat must stay the last force"
+
+    def of(self, spec):
+        """(System, bodies or None) of a configuration."""
+        if spec[1]:
+            return self.rigid, self.bodies
+        return (self.heavy if spec[2] else self.system), None
+
+
+def makeIntegrator(spec, stepFs, seed, bodies=None):
     _, rigid, _, floor, _ = spec
     dt = stepFs*unit.femtoseconds
     if rigid:
-        integrator = openmmrigid.RigidBodyLangevinIntegrator(TEMPERATURE, FRICTION, dt)
+        integrator = (openmmrigid.RigidBodyLangevinIntegrator(TEMPERATURE, FRICTION, dt) if bodies is None else
+                      openmmrigid.RigidBodyLangevinIntegrator(TEMPERATURE, FRICTION, dt, bodies))
         integrator.setMinimumMomentOfInertia(floor)
     else:
         integrator = openmm.LangevinMiddleIntegrator(TEMPERATURE, FRICTION, dt)
@@ -130,11 +167,12 @@ class Waters:
         self.count = len(self.oxygens)
 
 
-def simulate(system, state, waters, spec, stepFs, seed, npt, discard, production, platform, properties):
+def simulate(models, state, waters, spec, stepFs, seed, npt, discard, production, platform, properties):
     """One run: the samples, the oxygen positions and dipole axes of every sample, and a failure message."""
+    system, bodies = models.of(spec)
     if npt:
         system.getForce(system.getNumForces() - 1).setRandomNumberSeed(seed + 1)
-    integrator = makeIntegrator(spec, stepFs, seed)
+    integrator = makeIntegrator(spec, stepFs, seed, bodies)
     context = openmm.Context(system, integrator, platform, properties)
     context.setState(state)
     # Fresh velocities for this configuration's masses and moments: those of the start, drawn for the
@@ -234,28 +272,36 @@ def runSystem(name, args, platform, properties):
     stamp(f"{name}: {spec['title']}: minimizing and equilibrating {args.equilibrate:g} ps (stock, 2 fs)")
     state = equilibrate(nptSystem, positions, platform, properties, args.equilibrate)
     system = nptSystem if spec["npt"] else withoutBarostat(nptSystem)
-    heavy = heavyHydrogens(system, topology)
+    rigidSolute = spec.get("rigidSolute", False)
+    models = Models(system, topology, rigidSolute)
     waters = Waters(topology)
-    configs = configurations(args.floors, args.quick, spec["protein"])
-    starts = [state]
+    configs = configurations(args.floors, args.quick, spec["protein"], rigidSolute)
+    # The starts: 3 ps more of the equilibrated state each. With the rigid solute the rigid integrator
+    # makes its own from the same state, so that every one of its runs has the solute's shape of that
+    # state (a body takes the shape it has when the Context is made), the one model it samples.
+    starts, rigidStarts = [state], [state]
     for start in range(1, args.starts):
-        integrator = openmm.LangevinMiddleIntegrator(TEMPERATURE, FRICTION, 2*unit.femtoseconds)
-        integrator.setRandomNumberSeed(start)
-        context = openmm.Context(system, integrator, platform, properties)
-        context.setState(state)
-        context.setVelocitiesToTemperature(TEMPERATURE, start)
-        integrator.step(1500)
-        starts.append(context.getState(getPositions=True, getVelocities=True))
+        for rigid in ((False, True) if rigidSolute else (False,)):
+            if rigid:
+                integrator = makeIntegrator(configs["rigid"], 2, start, models.bodies)
+            else:
+                integrator = openmm.LangevinMiddleIntegrator(TEMPERATURE, FRICTION, 2*unit.femtoseconds)
+                integrator.setRandomNumberSeed(start)
+            context = openmm.Context(models.rigid if rigid else system, integrator, platform, properties)
+            context.setState(state)
+            context.setVelocitiesToTemperature(TEMPERATURE, start)
+            integrator.step(1500)
+            (rigidStarts if rigid else starts).append(context.getState(getPositions=True, getVelocities=True))
     runs = []
     for index, (label, config) in enumerate(configs.items()):
-        for start, startState in enumerate(starts):
+        for start, startState in enumerate(rigidStarts if rigidSolute and config[1] else starts):
             failed = False
             for stepFs in config[4]:
                 if failed:
                     runs.append(dict(config=label, step=stepFs, start=start, failure="not run (unstable at a smaller step)"))
                     continue
                 seed = 1000*start + 10*index + config[4].index(stepFs) + 1
-                data, oxygens, axes, boxes, failure = simulate(heavy if config[2] else system, startState, waters, config,
+                data, oxygens, axes, boxes, failure = simulate(models, startState, waters, config,
                                                                stepFs, seed, spec["npt"], args.discard, args.time, platform,
                                                                properties)
                 run = dict(config=label, step=stepFs, start=start, failure=failure)
@@ -270,7 +316,7 @@ def runSystem(name, args, platform, properties):
                     say(f"  {label} {stepFs:g} fs start {start}: U/water {run['potential'][0]:.3f} +- {run['potential'][1]:.3f}, "
                         f"T {run['temperature'][0]:.1f} K, D {run['D']:.2f}, tau_1 {run['tauRot']:.2f} ps, tau_U {run['tauU']:.2f} ps")
                 runs.append(run)
-    result = dict(name=name, title=spec["title"], npt=spec["npt"], waters=waters.count, runs=runs,
+    result = dict(name=name, title=spec["title"], npt=spec["npt"], waters=waters.count, runs=runs, separateModels=rigidSolute,
                   provenance=header(platform.getName(), args.threads or None),
                   configs={label: list(config) for label, config in configs.items()}, tolerance=args.tolerance)
     analyse(result)
@@ -278,7 +324,7 @@ def runSystem(name, args, platform, properties):
     (args.folder/f"{name}.json").write_text(json.dumps(result, indent=1))
     stamp(f"{name}: accurate steps " + ", ".join(f"{label} {entry['accurateStep']}" for label, entry in result["summary"].items())
           + "; timing")
-    timing(result, system, heavy, state, configs, platform, properties, args)
+    timing(result, models, state, configs, platform, properties, args)
     result["seconds"] = time.perf_counter() - started
     return result
 
@@ -293,7 +339,8 @@ def retimeSystem(name, args, platform, properties):
     state = equilibrate(nptSystem, positions, platform, properties, args.equilibrate)
     system = nptSystem if spec["npt"] else withoutBarostat(nptSystem)
     analyse(result)
-    timing(result, system, heavyHydrogens(system, topology), state, result["configs"], platform, properties, args)
+    timing(result, Models(system, topology, spec.get("rigidSolute", False)), state, result["configs"], platform, properties,
+           args)
     result["retimed"] = header(platform.getName(), args.threads or None)
     return result
 
@@ -308,19 +355,29 @@ def analyse(result):
     runs = result["runs"]
     keys = ("potential", "density") if result["npt"] else ("potential",)
     good = lambda label, step: [r for r in runs if r["config"] == label and r["step"] == step and not r["failure"]]
-    reference = {key: [] for key in keys}
-    for label in ("stock", "rigid"):
-        if good(label, 2):
-            for key in keys:
-                reference[key].append(pooled(good(label, 2), key))
-    reference = {key: (float(np.mean([v[0] for v in values])), float(np.sqrt(sum(v[1]**2 for v in values))/len(values)))
-                 for key, values in reference.items() if values}
-    result["reference"] = reference
-    if len(good("stock", 2)) and len(good("rigid", 2)):
-        a, b = pooled(good("stock", 2), "potential"), pooled(good("rigid", 2), "potential")
-        result["referenceCheck"] = [a[0] - b[0], float(np.hypot(a[1], b[1]))]
+
+    def referenceOf(labels):
+        """The pooled 2 fs runs of these configurations: {key: (mean, error)}."""
+        values = {key: [pooled(good(label, 2), key) for label in labels if good(label, 2)] for key in keys}
+        return {key: (float(np.mean([v[0] for v in pairs])), float(np.sqrt(sum(v[1]**2 for v in pairs))/len(pairs)))
+                for key, pairs in values.items() if pairs}
+
+    # One model: stock's and the rigid integrator's 2 fs runs pooled (their difference printed as a check).
+    # Two models (the rigid solute): each family, stock's and the rigid integrator's, against its own.
+    if result.get("separateModels"):
+        references = {False: referenceOf(["stock"]), True: referenceOf(["rigid"])}
+        result["reference"], result["rigidReference"] = references[False], references[True]
+        result.pop("referenceCheck", None)
+    else:
+        reference = referenceOf(["stock", "rigid"])
+        references = {False: reference, True: reference}
+        result["reference"] = reference
+        if len(good("stock", 2)) and len(good("rigid", 2)):
+            a, b = pooled(good("stock", 2), "potential"), pooled(good("rigid", 2), "potential")
+            result["referenceCheck"] = [a[0] - b[0], float(np.hypot(a[1], b[1]))]
     summary = {}
     for label, config in result["configs"].items():
+        reference = references[bool(config[1])]
         starts = len({r["start"] for r in runs})
         points = []
         for step in config[4]:
@@ -382,13 +439,13 @@ def accurateStep(fit, points, tolerance):
     return best
 
 
-def timing(result, system, heavy, state, configs, platform, properties, args):
+def timing(result, models, state, configs, platform, properties, args):
     """ns/day of each configuration at the integer step at or below its accurate step, interleaved. A
     rigid configuration is timed as a long run spends its steps: outside the accuracy check's episodes
     and in them, weighted by the check's duty at that step (benchmarking.productionSeconds())."""
     while True:
         try:
-            return timeOnce(result, system, heavy, state, configs, platform, properties, args)
+            return timeOnce(result, models, state, configs, platform, properties, args)
         except TimingFailure as failure:
             # A step that fails within the timing's few hundred steps from a fresh start is not one a
             # user can run: it counts as a start that did not run stably (analyse()), and the timing
@@ -400,7 +457,7 @@ def timing(result, system, heavy, state, configs, platform, properties, args):
             analyse(result)
 
 
-def timeOnce(result, system, heavy, state, configs, platform, properties, args):
+def timeOnce(result, models, state, configs, platform, properties, args):
     # Each configuration in --timing-contexts Contexts of their own (velocities drawn with their own
     # seeds), their blocks pooled: two Contexts of one configuration, timed side by side, differ by up
     # to 4 % on this machine (the layout each one's memory and neighbour list happen to get), which one
@@ -408,7 +465,7 @@ def timeOnce(result, system, heavy, state, configs, platform, properties, args):
     integrators, contexts, twins = {}, [], {}
 
     def bind(key, integrator, config, seed):
-        context = openmm.Context(heavy if config[2] else system, integrator, platform, properties)
+        context = openmm.Context(models.of(config)[0], integrator, platform, properties)
         context.setState(state)
         # Velocities for this configuration's masses and moments, as in its runs: the start's, drawn
         # for the particles' own, would give raised moments a rotation I'/I times too hot, which a
@@ -424,7 +481,7 @@ def timeOnce(result, system, heavy, state, configs, platform, properties, args):
         step = int(np.floor(step))
         for copy in range(args.timing_contexts):
             seed = 5 + copy
-            integrator = makeIntegrator(config, step, seed)
+            integrator = makeIntegrator(config, step, seed, models.of(config)[1])
             if config[1]:
                 twins[(label, step, copy)] = (label + " (episode)", step, copy)
                 bind(twins[(label, step, copy)], episodeTwin(integrator), config, seed)
@@ -480,8 +537,12 @@ def report(results, quick):
             document.text("This system's run: " + "; ".join(result["provenance"]) + ".")
         reference = result["reference"]["potential"]
         check = result.get("referenceCheck")
+        rigidReference = result.get("rigidReference", {}).get("potential")
         document.text(f"Reference U/water {reference[0]:.3f} +- {reference[1]:.3f} kJ/mol (pooled 2 fs runs"
-                      + (f"; stock - rigid at 2 fs: {check[0]:+.3f} +- {check[1]:.3f}" if check else "") + "). "
+                      + (f"; stock - rigid at 2 fs: {check[0]:+.3f} +- {check[1]:.3f}" if check else "")
+                      + (f" of stock; the rigid integrator's model, whose solute is one body without its internal terms: "
+                         f"{rigidReference[0]:.3f} +- {rigidReference[1]:.3f}, its own 2 fs runs" if rigidReference else "")
+                      + "). "
                       f"Tolerance {result['tolerance']:g} kJ/mol per water; {len({r['start'] for r in result['runs']})} "
                       f"starts of {result['waters']} waters; wall time {result.get('seconds', 0)/60:.0f} min.")
         rows = []
