@@ -88,10 +88,9 @@ def kicked_free_energy(system, m, x, v, f, free, kick, project=True):
     return sum(0.5 * m[p] * kicked[p] @ kicked[p] for p in free)
 
 
-def numpy_on_step_energy(system, integrator, context, floor=0.0, project=True):
+def numpy_on_step_energy(system, integrator, context, floor=0.0, project=True, kick=0.5 * DT):
     x, v, f = state_arrays(context)
     m = masses_of(system)
-    kick = 0.5 * DT
     energy, inBodies = 0.0, set()
     for b in range(integrator.getNumBodies()):
         members = list(integrator.getBodyParticles(b))
@@ -131,11 +130,17 @@ def test_on_step_energy_against_numpy_on_the_mixed_system(mixed):
     unprojected = numpy_on_step_energy(mixed.system, integrator, context, project=False)
     halfStep = context.getState(getEnergy=True).getKineticEnergy().value_in_unit(KJ)
     onStep = integrator.getOnStepKineticEnergy().value_in_unit(KJ)
-    # The kick, and the projection of the free particles' kick, make differences well above the agreement
-    # asked for (the kick's change is a sum of dt/2 F.v of either sign: 0.1 kJ/mol of 2100 in one clean
-    # clone's state, so the bound is 1000 times the agreement, not a fraction of the energy).
-    assert abs(onStep - halfStep) > 1e-6 * halfStep
-    assert abs(unprojected - expected) > 1e-6 * expected
+    # The kick and the projection of the free particles' kick matter far above the agreement asked for.
+    # The kick's first-order change, a sum of h F.v of either sign, can cancel (0.1 kJ/mol of 2100 in one
+    # clean clone's state); its second-order term cannot: the energy is quadratic in the kick h (the
+    # projection is linear), so K(2h) - 2 K(h) + K(0) = h^2 (sum F^2/m + torques' tau.I^-1.tau) > 0. The
+    # projection removes a sum of squares.
+    h = 0.5 * DT
+    curvature = (numpy_on_step_energy(mixed.system, integrator, context, kick=2 * h) - 2 * expected
+                 + numpy_on_step_energy(mixed.system, integrator, context, kick=0.0))
+    assert curvature > 1e-6 * expected
+    assert onStep != pytest.approx(halfStep, rel=1e-9)
+    assert unprojected - expected > 1e-6 * expected
     assert onStep == pytest.approx(expected, rel=1e-9)
 
 
