@@ -416,6 +416,10 @@ def checkDuty(stepFs):
     return episode/(episode + CHECK_PAUSE_PS)
 
 
+# What a timing's label gets added for the twin of episodeTwin().
+EPISODE = " (check episode)"
+
+
 def episodeTwin(integrator):
     """For a rigid integrator whose copy will time a long run's steps outside the check's episodes: the
     check switched off on it, and a twin (an XML copy) that measures the shadow work at every step,

@@ -62,7 +62,8 @@ from openmm import app, unit
 
 import openmmrigid
 from benchmarking import (RESULTS as BENCHMARK_RESULTS, Progress, ResultsDocument, blockMean, checkDuty, episodeTwin, header,
-                          nsPerDay, openLog, productionSeconds, pyplot, say, stamp, timeInterleaved, TimingFailure)
+                          EPISODE, nsPerDay, openLog, productionSeconds, pyplot, say, stamp, timeInterleaved,
+                          TimingFailure)
 from nvt_accuracy import (AMU_PER_NM3_IN_G_PER_ML, BOLTZMANN, FRICTION, SYSTEMS as NVT_SYSTEMS, TEMPERATURE, buildModel,
                           equilibrate, stockDegreesOfFreedom, withoutBarostat)
 
@@ -265,13 +266,18 @@ def autocorrelationTime(values):
 # ---------------------------------------------------------------------------------------------------
 
 
-def runSystem(name, args, platform, properties):
+def prepare(name, args, platform, properties):
+    """The system's spec, Topology, its System (NPT or NVT) and the equilibrated state its runs start from."""
     spec = SYSTEMS[name]
-    started = time.perf_counter()
     topology, positions, nptSystem = buildModel(spec["model"], spec["protein"])
     stamp(f"{name}: {spec['title']}: minimizing and equilibrating {args.equilibrate:g} ps (stock, 2 fs)")
     state = equilibrate(nptSystem, positions, platform, properties, args.equilibrate)
-    system = nptSystem if spec["npt"] else withoutBarostat(nptSystem)
+    return spec, topology, (nptSystem if spec["npt"] else withoutBarostat(nptSystem)), state
+
+
+def runSystem(name, args, platform, properties):
+    started = time.perf_counter()
+    spec, topology, system, state = prepare(name, args, platform, properties)
     rigidSolute = spec.get("rigidSolute", False)
     models = Models(system, topology, rigidSolute)
     waters = Waters(topology)
@@ -333,11 +339,8 @@ def retimeSystem(name, args, platform, properties):
     """The saved result of a system with its timing measured again (the system built and equilibrated as
     for its runs; the sampling and its analysis are kept)."""
     result = json.loads((args.folder/f"{name}.json").read_text())
-    spec = SYSTEMS[name]
-    topology, positions, nptSystem = buildModel(spec["model"], spec["protein"])
-    stamp(f"{name}: timing again; minimizing and equilibrating {args.equilibrate:g} ps (stock, 2 fs)")
-    state = equilibrate(nptSystem, positions, platform, properties, args.equilibrate)
-    system = nptSystem if spec["npt"] else withoutBarostat(nptSystem)
+    stamp(f"{name}: timing again")
+    spec, topology, system, state = prepare(name, args, platform, properties)
     analyse(result)
     timing(result, Models(system, topology, spec.get("rigidSolute", False)), state, result["configs"], platform, properties,
            args)
@@ -451,7 +454,7 @@ def timing(result, models, state, configs, platform, properties, args):
             # user can run: it counts as a start that did not run stably (analyse()), and the timing
             # starts again with that configuration's accurate step below it.
             label, step, _ = failure.label
-            label = label.replace(" (episode)", "")
+            label = label.replace(EPISODE, "")
             say(f"  {label} at {step} fs: unstable while timed ({str(failure.error)[:90]}); its accurate step is now below")
             result.setdefault("timingFailures", {}).setdefault(label, []).append(step)
             analyse(result)
@@ -483,7 +486,7 @@ def timeOnce(result, models, state, configs, platform, properties, args):
             seed = 5 + copy
             integrator = makeIntegrator(config, step, seed, models.of(config)[1])
             if config[1]:
-                twins[(label, step, copy)] = (label + " (episode)", step, copy)
+                twins[(label, step, copy)] = (label + EPISODE, step, copy)
                 bind(twins[(label, step, copy)], episodeTwin(integrator), config, seed)
             bind((label, step, copy), integrator, config, seed)
     wall, _ = timeInterleaved(integrators, args.timing_steps, args.timing_repetitions)

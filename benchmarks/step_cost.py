@@ -51,7 +51,7 @@ import openmm
 from openmm import unit
 
 import openmmrigid
-from benchmarking import (RESULTS, ResultsDocument, blockSteps, checkDuty, episodeTwin, header, loadAverage, machine,
+from benchmarking import (EPISODE, RESULTS, ResultsDocument, blockSteps, checkDuty, episodeTwin, header, loadAverage, machine,
                           medianRange, openLog, productionSeconds, pyplot, say, saveFigure, stamp, timeInterleaved, writeCsv)
 
 plt = pyplot()
@@ -65,7 +65,6 @@ MODEL_NAMES = {"tip3p": "TIP3P", "tip4pew": "TIP4P-Ew"}
 STOCK, EXACT, NOSQUISH = "VerletIntegrator+SETTLE", "RigidBodyIntegrator/Exact", "RigidBodyIntegrator/NoSquish"
 # With --langevin: the Langevin pair, ours timed against stock LangevinMiddleIntegrator (1/ps, 300 K).
 STOCK_LANGEVIN, LANGEVIN = "LangevinMiddleIntegrator+SETTLE", "RigidBodyLangevinIntegrator/Exact"
-EPISODE = " (check episode)"  # the twin of a rigid integrator that times a step in the accuracy check's episodes
 
 
 # ---------------------------------------------------------------------------------------------------
