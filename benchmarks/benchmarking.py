@@ -14,10 +14,13 @@ software and command of the run (``ResultsDocument``); what the benchmark prints
 import contextlib
 import csv
 import datetime
+import fcntl
 import hashlib
+import json
 import os
 import platform as pyplatform
 import shlex
+import socket
 import subprocess
 import sys
 import time
@@ -462,3 +465,139 @@ def principalKineticEnergies(positions, velocities, masses, molecules):
     moments, axes = np.linalg.eigh(inertia)                     # ascending moments, axes as columns
     principal = np.einsum("nij,ni->nj", axes, angular)
     return 0.5*float(np.sum(total[:, 0]*np.sum(speed**2, axis=1))), np.sum(principal**2/(2*moments), axis=0)
+
+
+# ---------------------------------------------------------------------------------------------------
+# Samples kept between runs
+
+class SampleStore:
+    """Independent samples of a long computation, kept between runs, sessions and machines, so that a
+    benchmark too long for one sitting grows toward its target a part at a time and several worker
+    processes add to it at once.
+
+    The computation is a set of jobs (string keys); a job's samples are numbered (a sample index
+    names its input, e.g. an equilibrium frame, so a sample is never computed twice) and each is a
+    list of numbers. A job fails at a sample (an unstable run): it then takes no more samples, and
+    jobs that name it as a blocker are not run either. A worker claims one job at a time, the one with
+    the fewest samples below the target (earliest in the given order on ties), so every job grows
+    together and an interrupted run leaves an even table. A claim lapses with its process, and a
+    claim made on another machine is void (a store travels between machines in git, not shared).
+
+    One JSON file, `store.json` in `folder`, read and written whole under an exclusive lock (fcntl) on
+    `store.lock`, replaced atomically; `setup` (a dict of what makes samples comparable) is written
+    by the first run and must match in every later one."""
+
+    def __init__(self, folder, setup=None):
+        """setup None: open the store as it is (a worker, a report)."""
+        self.folder = Path(folder)
+        self.folder.mkdir(parents=True, exist_ok=True)
+        self.path, self.lockPath = self.folder/"store.json", self.folder/"store.lock"
+        if setup is None:
+            return
+        setup = json.loads(json.dumps(setup))  # as it reads back
+        with self._locked() as data:
+            if data["setup"] is None:
+                data["setup"] = setup
+            elif data["setup"] != setup:
+                raise ValueError(f"the samples in {self.folder} were made with {data['setup']}, not {setup}: "
+                                 "choose another folder for this set-up")
+
+    @contextlib.contextmanager
+    def _locked(self, write=True):
+        with open(self.lockPath, "a") as lock:
+            fcntl.flock(lock, fcntl.LOCK_EX)
+            try:
+                if self.path.exists():
+                    data = json.loads(self.path.read_text())
+                else:
+                    data = {"setup": None, "jobs": {}, "claims": {}, "runs": []}
+                yield data
+                if write:
+                    temporary = self.path.with_suffix(f".{os.getpid()}.tmp")
+                    temporary.write_text(json.dumps(data, indent=1))
+                    os.replace(temporary, self.path)
+            finally:
+                fcntl.flock(lock, fcntl.LOCK_UN)
+
+    @staticmethod
+    def _job(data, key):
+        return data["jobs"].setdefault(key, {"samples": {}, "failed": None, "flags": {}})
+
+    def read(self):
+        """The whole store as a dict: setup, jobs ({key: {samples: {index: values}, failed, flags}}),
+        claims and runs."""
+        with self._locked(write=False) as data:
+            return data
+
+    def samples(self, key):
+        """A job's samples, in index order: [(index, values)]."""
+        job = self.read()["jobs"].get(key, {"samples": {}})
+        return sorted(((int(index), values) for index, values in job["samples"].items()))
+
+    @staticmethod
+    def _live(claim):
+        if claim["host"] != socket.gethostname():
+            return False
+        try:
+            os.kill(claim["pid"], 0)
+        except ProcessLookupError:
+            return False
+        except PermissionError:
+            return True
+        return True
+
+    @staticmethod
+    def blocked(data, key, blockers):
+        """Whether one of the job's blockers (keys) has failed."""
+        return any(data["jobs"].get(other, {}).get("failed") is not None for other in blockers)
+
+    def claim(self, keys, target, blockers=lambda key: ()):
+        """Claim the next job for this process: of `keys` (in order), those neither failed, blocked
+        (blockers(key): the keys whose failure stops it) nor claimed by a live worker, with fewer than
+        `target` samples, the one with the fewest. Returns (key, the missing indices below target, in
+        order) or None when nothing is left."""
+        now = time.time()
+        with self._locked() as data:
+            claims = data["claims"]
+            for key in [key for key, claim in claims.items() if not self._live(claim)]:
+                del claims[key]
+            best = None
+            for order, key in enumerate(keys):
+                job = data["jobs"].get(key, {"samples": {}, "failed": None})
+                if key in claims or job["failed"] is not None or self.blocked(data, key, blockers(key)):
+                    continue
+                count = sum(1 for index in job["samples"] if int(index) < target)
+                if count < target and (best is None or count < best[0]):
+                    best = (count, order, key)
+            if best is None:
+                return None
+            key = best[2]
+            claims[key] = {"host": socket.gethostname(), "pid": os.getpid(), "since": now}
+            have = self._job(data, key)["samples"]
+            return key, [index for index in range(target) if str(index) not in have]
+
+    def add(self, key, index, values, **flags):
+        """Record a sample; flags (booleans) are or-ed into the job's (e.g. whether a check fired)."""
+        with self._locked() as data:
+            job = self._job(data, key)
+            job["samples"][str(index)] = [float(value) for value in values]
+            for name, value in flags.items():
+                job["flags"][name] = bool(job["flags"].get(name, False) or value)
+
+    def fail(self, key, index, reason):
+        with self._locked() as data:
+            self._job(data, key)["failed"] = {"sample": int(index), "reason": str(reason)}
+
+    def release(self, key):
+        with self._locked() as data:
+            data["claims"].pop(key, None)
+
+    def note(self, key, value):
+        """Keep a value beside the samples (e.g. a timing), under `key` in the store's "notes"."""
+        with self._locked() as data:
+            data.setdefault("notes", {})[key] = value
+
+    def addRun(self, record):
+        """Record what a run added (its provenance and counts) in the store's "runs"."""
+        with self._locked() as data:
+            data["runs"].append(record)

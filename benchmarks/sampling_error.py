@@ -21,14 +21,28 @@ hydrogenMass=3 amu, as benchmarks/nvt_accuracy.py). Equilibrium configurations: 
 `--equilibrate` ps), the same frames for every integrator. For each frame: velocities from
 Maxwell-Boltzmann, `--protocol` ps of the integrator (shadow work w_pi), velocities drawn again,
 `--protocol` ps more (w_omega); KL = (<w_pi> - <w_omega>)/2 in kT, +- the standard error of the
-paired differences. The cost: at each step, the integrators a user would run (no shadow work, no
+paired differences (frame i: velocity seeds 100 + 2i and 101 + 2i). The cost: at each step, the integrators a user would run (no shadow work, no
 accuracy check; stock-middle as OpenMM's LangevinMiddleIntegrator) timed side by side (interleaved
 blocks, medians).
 An integrator that fails (NaN, an unstable drift) at a step is not run at larger ones. The rigid
 integrators' accuracy check is recorded (whether it fired) and its warning not shown.
 
-    python benchmarks/sampling_error.py --quick      # 216 waters, 3 steps, 3 frames, 0.2 ps: a smoke check of minutes
-    python benchmarks/sampling_error.py              # the full run (hours on 2 cores): docs/results/sampling_error.md
+    python benchmarks/sampling_error.py --quick      # 216 waters, 3 steps, 3 frames, 0.2 ps: a smoke check of a minute
+    python benchmarks/sampling_error.py --systems water --workers 2 --hours 2 --no-timing   # add to the full run
+    python benchmarks/sampling_error.py --systems water --report --retime  # time and report (quiet machine)
+
+The full run (50 frames, 6 steps, 5 integrators, 2 systems) is about 18 core-hours on a 2-core CPU
+machine, more than a session: its samples are kept between runs in benchmarks/stores/sampling_error/
+<molecules>w-<protocol>ps-<platform>/ (benchmarking.SampleStore: the shadow-work pairs of every
+integrator, step and frame; the System as XML; the frames, single precision; the equilibrium chain's
+last state, which a later run continues for more frames), committed with the code. Each run adds
+frames until `--hours` pass or every job has `--samples`, in `--workers` processes at once (two
+1-thread workers use a 2-core machine better than one with 2 threads), each job (an integrator at a
+step) growing in turn, the fewest frames first, so that an interrupted run leaves an even table; then
+it times the steps not yet timed (`--no-timing` leaves that for a quiet machine; `--retime` times them
+all again) and writes docs/results/sampling_error.md from everything stored, with the runs that made
+it. Frames from different runs and machines are independent samples and pool; the store's folder
+names what would make them differ (molecules, protocol, platform) and its set-up must match.
 
 Compare the ranking with the U-per-molecule reading of benchmarks/nvt_accuracy.py
 (docs/results/nvt_accuracy.md).
@@ -42,6 +56,10 @@ openmmtools' VRORV (BAOAB) measures. Without that correction (as in the first re
 """
 
 import argparse
+import datetime
+import multiprocessing
+import shutil
+import time
 import warnings
 
 import numpy as np
@@ -230,141 +248,288 @@ class Runner:
         return work if np.isfinite(work) else None
 
 
-def equilibriumFrames(system, positions, platform, properties, count, spacingPs, equilibratePs):
-    """Frames of an equilibrium run: positions and box vectors."""
+STORES = benchmarking.ROOT/"benchmarks"/"stores"/"sampling_error"
+
+
+def frameFiles(folder, name):
+    return folder/f"system-{name}.xml", folder/f"frames-{name}.npz", folder/f"chain-{name}.xml"
+
+
+def ensureFrames(folder, name, molecules, count, spacingPs, equilibratePs, platform, properties):
+    """At least `count` equilibrium frames of system `name` in the store's folder: a chain of
+    RigidBodyLangevinIntegrator at 1 fs and friction 5/ps (after `equilibratePs`), a frame every
+    `spacingPs`. The System is saved as XML (every worker and later run uses that one) and the chain's
+    state after its last frame, so that a later run that wants more frames continues it (with a new
+    seed); each frame is saved as it is made."""
+    systemPath, framesPath, chainPath = frameFiles(folder, name)
+    frames = dict(np.load(framesPath)) if framesPath.exists() else {"positions": np.zeros((0, 0, 3)), "boxes": np.zeros((0, 3, 3))}
+    have = len(frames["positions"])
+    if have >= count:
+        return
     integrator = openmmrigid.RigidBodyLangevinIntegrator(TEMPERATURE, 5.0, 0.001)
-    integrator.setRandomNumberSeed(2)
+    integrator.setRandomNumberSeed(2 + have)
     integrator.setAccuracyCheck(False)
-    context = openmm.Context(system, integrator, platform, properties)
-    context.setPositions(positions)
-    openmm.LocalEnergyMinimizer.minimize(context, 10.0, 500)
-    context.setVelocitiesToTemperature(TEMPERATURE, 2)
-    integrator.step(int(round(equilibratePs/0.001)))
-    frames = []
-    for _ in range(count):
+    if systemPath.exists():
+        system = openmm.XmlSerializer.deserialize(systemPath.read_text())
+        context = openmm.Context(system, integrator, platform, properties)
+        context.setState(openmm.XmlSerializer.deserialize(chainPath.read_text()))
+        stamp(f"{name}: frames {have} to {count - 1}, continuing the chain")
+    else:
+        _, positions, system = makeSystem(name, molecules)
+        systemPath.write_text(openmm.XmlSerializer.serialize(system))
+        context = openmm.Context(system, integrator, platform, properties)
+        context.setPositions(positions)
+        openmm.LocalEnergyMinimizer.minimize(context, 10.0, 500)
+        context.setVelocitiesToTemperature(TEMPERATURE, 2)
+        stamp(f"{name}: {system.getNumParticles()} particles; equilibrating {equilibratePs:g} ps, then {count} frames")
+        integrator.step(int(round(equilibratePs/0.001)))
+    positions, boxes = list(frames["positions"]), list(frames["boxes"])
+    while len(positions) < count:
         integrator.step(int(round(spacingPs/0.001)))
-        state = context.getState(getPositions=True)
-        frames.append((state.getPositions(), state.getPeriodicBoxVectors()))
-    return frames
+        state = context.getState(getPositions=True, getVelocities=True)
+        # Single precision (1e-7 of a box edge) keeps the store small; the chain goes on from the
+        # full-precision state.
+        positions.append(state.getPositions(asNumpy=True).value_in_unit(unit.nanometer).astype(np.float32))
+        boxes.append(np.array(state.getPeriodicBoxVectors(asNumpy=True).value_in_unit(unit.nanometer)))
+        np.savez_compressed(framesPath.with_suffix(".tmp.npz"), positions=np.array(positions, np.float32), boxes=np.array(boxes))
+        framesPath.with_suffix(".tmp.npz").replace(framesPath)
+        chainPath.write_text(openmm.XmlSerializer.serialize(state))
+
+
+def loadFrames(folder, name):
+    systemPath, framesPath, _ = frameFiles(folder, name)
+    frames = np.load(framesPath)
+    return openmm.XmlSerializer.deserialize(systemPath.read_text()), frames["positions"], frames["boxes"]
+
+
+def jobKey(systemName, kind, stepFs):
+    return f"{systemName}|{kind}|{stepFs:g}"
+
+
+def blockers(key):
+    """A step does not run once a smaller step of the same integrator on the same system failed."""
+    systemName, kind, stepFs = key.split("|")
+    return [jobKey(systemName, kind, smaller) for smaller in STEPS[0] if smaller < float(stepFs)]
+
+
+STEPS = [[]]  # the run's steps (fs), set in main(): blockers() needs them in worker processes too
+
+
+def worker(folder, keys, steps, target, chunk, deadline, platformName, threads, protocol):
+    """Claim jobs and add their samples until every job has `target` or the deadline passes: for each
+    frame i, the shadow works (kT) of the protocol from the frame and from the state it reached with
+    velocities drawn again (seeds 100 + 2i and 101 + 2i)."""
+    STEPS[0] = steps
+    store = benchmarking.SampleStore(folder)
+    platform = openmm.Platform.getPlatformByName(platformName)
+    properties = benchmarking.cpuProperties(platform, threads)
+    loaded = {}
+    while time.time() < deadline:
+        claimed = store.claim(keys, target, blockers)
+        if claimed is None:
+            return
+        key, missing = claimed
+        systemName, kind, stepFs = key.split("|")
+        stepFs = float(stepFs)
+        if systemName not in loaded:
+            loaded[systemName] = loadFrames(folder, systemName)
+        system, positions, boxes = loaded[systemName]
+        try:
+            runner = Runner(kind, stepFs, system, platform, properties, seed=11 + missing[0])
+            count = int(round(protocol/(stepFs*1e-3)))
+            for index in missing[:chunk]:
+                first = runner.work(positions[index].astype(float), boxes[index], count, velocitySeed=100 + 2*index)
+                second = runner.work(None, None, count, velocitySeed=101 + 2*index) if first is not None else None
+                if first is None or second is None:
+                    store.fail(key, index, "NaN or an exception")
+                    stamp(f"{key}: failed at frame {index} (unstable); larger steps not run")
+                    break
+                store.add(key, index, (first, second), fired=runner.fired)
+                if time.time() >= deadline:
+                    break
+            del runner
+        finally:
+            store.release(key)
+        done = len(store.samples(key))
+        stamp(f"{key}: {done} frame(s)")
+
+
+def timeSteps(folder, systemName, kinds, steps, platform, properties, repetitions, retime):
+    """ns/day at each step: every integrator with samples there, timed side by side (interleaved
+    blocks, medians) from the first frame with velocities at 300 K; kept in the store's notes (a step
+    is timed again when an integrator is new there, or with retime)."""
+    store = benchmarking.SampleStore(folder)
+    system, positions, boxes = loadFrames(folder, systemName)
+    for stepFs in steps:
+        data = store.read()
+        kindsHere = [kind for kind in kinds if len(data["jobs"].get(jobKey(systemName, kind, stepFs), {}).get("samples", {})) >= 2
+                     and data["jobs"][jobKey(systemName, kind, stepFs)]["failed"] is None]
+        noteKey = f"nsPerDay|{systemName}|{stepFs:g}"
+        old = data.get("notes", {}).get(noteKey, {})
+        if not kindsHere or (not retime and all(kind in old.get("values", {}) for kind in kindsHere)):
+            continue
+        integrators, contexts = {}, []
+        for kind in kindsHere:
+            integrators[kind] = timedIntegrator(kind, stepFs)
+            context = openmm.Context(system, integrators[kind], platform, properties)
+            context.setPeriodicBoxVectors(*boxes[0])
+            context.setPositions(positions[0].astype(float))
+            context.setVelocitiesToTemperature(TEMPERATURE*unit.kelvin, 3)
+            contexts.append(context)
+        wall = benchmarking.timeInterleaved(integrators, max(10, int(round(0.2/(stepFs*1e-3)))), repetitions)[0]
+        values = {kind: benchmarking.nsPerDay(stepFs, float(np.median(seconds))) for kind, seconds in wall.items()}
+        store.note(noteKey, {"values": values, "date": f"{datetime.datetime.now().astimezone():%Y-%m-%d %H:%M %Z}",
+                             "commit": benchmarking.commit(), "load": benchmarking.loadAverage()})
+        stamp(f"{systemName} {stepFs:g} fs, ns/day side by side: " + ", ".join(f"{kind} {value:.2f}" for kind, value in values.items()))
+        del integrators, contexts
+
+
+def report(folder, systems, kinds, steps, quick, document):
+    store = benchmarking.SampleStore(folder)
+    data = store.read()
+    setup = data["setup"]
+    rows, csvRows = [], []
+    for systemName in systems:
+        figureData = {}
+        for kind in kinds:
+            for stepFs in steps:
+                key = jobKey(systemName, kind, stepFs)
+                job = data["jobs"].get(key)
+                if job is None:
+                    continue
+                if job["failed"] is not None:
+                    rows.append([systemName, kind, f"{stepFs:g}", "", f"unstable (frame {job['failed']['sample']})", "", ""])
+                    continue
+                if benchmarking.SampleStore.blocked(data, key, blockers(key)):
+                    continue
+                pairs = np.array([values for _, values in sorted((int(i), v) for i, v in job["samples"].items())])
+                if len(pairs) < 2:
+                    continue
+                kl, error = configurationKL(pairs[:, 0], pairs[:, 1])
+                fired = ("yes" if job["flags"].get("fired") else "no") if kind.startswith("rigid") else ""
+                speed = data.get("notes", {}).get(f"nsPerDay|{systemName}|{stepFs:g}", {}).get("values", {}).get(kind)
+                rows.append([systemName, kind, f"{stepFs:g}", len(pairs), f"{kl:.3g} +- {error:.2g}",
+                             "" if speed is None else f"{speed:.2f}", fired])
+                csvRows.append(dict(system=systemName, integrator=kind, stepFs=stepFs, frames=len(pairs), kl=float(kl),
+                                    error=float(error), nsPerDay=float("nan") if speed is None else float(speed),
+                                    checkFired=fired))
+                if speed is not None:
+                    figureData.setdefault(kind, []).append((speed, kl, error, stepFs))
+        if figureData:
+            plt = benchmarking.pyplot()
+            figure, axes = plt.subplots(figsize=(6, 4))
+            for kind, points in figureData.items():
+                points = np.array(points)
+                low = np.maximum(points[:, 1], 1e-3)
+                axes.errorbar(points[:, 0], low, yerr=[np.minimum(points[:, 2], low - 1e-4), points[:, 2]], marker="o", label=kind)
+                for x, y, _, step in points:
+                    axes.annotate(f"{step:g}", (x, max(y, 1e-3)), fontsize=7)
+            axes.set_xlabel(f"ns/day ({setup['platform']})")
+            axes.set_ylabel("configuration-space KL divergence (kT)")
+            axes.set_yscale("log")
+            axes.set_title(f"{systemName}: sampling error against speed (labels: step in fs)", fontsize=9)
+            axes.legend(fontsize=8)
+            path = document.figurePath(f"sampling_error_{systemName}.png")
+            benchmarking.saveFigure(figure, path)
+            document.figure(path, f"{systemName}: KL divergence against ns/day")
+    document.section("KL divergence and speed",
+                     f"{setup['molecules']} waters; per integrator and step, the frames measured so far (of the equilibrium frames "
+                     f"{setup['spacing']:g} ps apart), {setup['protocol']:g} ps per half protocol, friction {FRICTION:g}/ps, "
+                     f"{TEMPERATURE:g} K; KL in kT +- one standard error (a value below 0 is 0 within its error). "
+                     "Estimates at negative values are plotted at 1e-3 kT. ns/day: side by side at each step, "
+                     "comparable within a step.")
+    document.table(["system", "integrator", "step (fs)", "frames", "KL (kT)", "ns/day", "accuracy check fired"], rows)
+    runs = data["runs"]
+    if runs:
+        document.section("Runs that made these samples",
+                         "Each run adds frames to the store (`" + str(folder.relative_to(benchmarking.ROOT)) + "`); "
+                         "frames from different runs are independent samples and pool.")
+        document.table(["date", "commit", "machine", "workers x threads", "frames added", "command"],
+                       [[run["date"], run["commit"], run["machine"], f"{run['workers']} x {run['threads']}", run["added"],
+                         f"`{run['command']}`"] for run in runs])
+    if csvRows:
+        benchmarking.writeCsv(benchmarking.RESULTS/"sampling_error"/("quick" if quick else "full")/"sampling_error.csv", csvRows)
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--quick", action="store_true", help="216 waters, steps 2 6 10 fs, 3 frames, 0.2 ps protocols")
+    parser.add_argument("--quick", action="store_true", help="216 waters, steps 2 6 10 fs, 3 frames, 0.2 ps protocols, a fresh store")
     parser.add_argument("--systems", nargs="+", default=None, choices=["water", "peptide"])
     parser.add_argument("--integrators", nargs="+", default=None,
                         choices=["rigid-exact", "rigid-nosquish", "rigid-raised", "stock-middle", "openmmtools-vrorv"])
     parser.add_argument("--floor", type=float, default=0.08, help="rigid-raised's minimum moment (amu nm^2; default 0.08)")
     parser.add_argument("--steps", nargs="+", type=float, default=None, help="steps in fs (default 1 2 4 6 8 10)")
-    parser.add_argument("--samples", type=int, default=None, help="equilibrium frames (default 50)")
+    parser.add_argument("--samples", type=int, default=None, help="equilibrium frames to reach per integrator and step (default 50)")
     parser.add_argument("--spacing", type=float, default=2.0, help="ps between frames (default 2)")
     parser.add_argument("--equilibrate", type=float, default=20.0, help="ps before the first frame (default 20)")
     parser.add_argument("--protocol", type=float, default=None, help="ps of each half of a protocol (default 2)")
     parser.add_argument("--molecules", type=int, default=None, help="waters (default 500; 216 with --quick)")
-    parser.add_argument("--threads", type=int, default=1)
+    parser.add_argument("--platform", default="CPU")
+    parser.add_argument("--threads", type=int, default=1, help="CPU threads per worker")
+    parser.add_argument("--workers", type=int, default=1, help="worker processes adding frames at once")
+    parser.add_argument("--chunk", type=int, default=2, help="frames a worker adds to a job before it chooses again")
+    parser.add_argument("--hours", type=float, default=None, help="stop adding frames after this long (the report is still written)")
+    parser.add_argument("--no-timing", action="store_true", help="leave ns/day for a later run on a quiet machine")
+    parser.add_argument("--retime", action="store_true", help="time every step again")
+    parser.add_argument("--report", action="store_true", help="only write the report from the stored frames")
     parser.add_argument("--timing-repetitions", type=int, default=5)
     args = parser.parse_args()
     quick = args.quick
     systems = args.systems or (["water"] if quick else ["water", "peptide"])
-    steps = args.steps or ([2.0, 6.0, 10.0] if quick else [1.0, 2.0, 4.0, 6.0, 8.0, 10.0])
+    steps = sorted(args.steps or ([2.0, 6.0, 10.0] if quick else [1.0, 2.0, 4.0, 6.0, 8.0, 10.0]))
+    STEPS[0] = steps
     samples = args.samples or (3 if quick else 50)
     protocol = args.protocol or (0.2 if quick else 2.0)
     molecules = args.molecules or (216 if quick else 500)
     if quick:
         args.spacing, args.equilibrate = 0.5, 1.0
     FLOOR[0] = args.floor
-    kinds = args.integrators or ["rigid-exact", "rigid-nosquish", "stock-middle", "openmmtools-vrorv"]
+    kinds = args.integrators or ["rigid-exact", "rigid-nosquish", "rigid-raised", "stock-middle", "openmmtools-vrorv"]
     if "openmmtools-vrorv" in kinds:
         try:
             import openmmtools.integrators  # noqa: F401
         except ImportError:
             say("openmmtools is not installed: openmmtools-vrorv left out")
             kinds = [kind for kind in kinds if kind != "openmmtools-vrorv"]
-    platform = openmm.Platform.getPlatformByName("CPU")
-    properties = {"Threads": str(args.threads)}
+    platform = openmm.Platform.getPlatformByName(args.platform)
+    properties = benchmarking.cpuProperties(platform, args.threads)
+    # A full run's samples are kept in git (benchmarks/stores/), so that later sessions add to them.
+    folder = (benchmarking.RESULTS/"sampling_error"/"quick" if quick else STORES)/f"{molecules}w-{protocol:g}ps-{args.platform}"
+    if quick and folder.exists() and not args.report:
+        shutil.rmtree(folder)
+    setup = dict(molecules=molecules, protocol=protocol, spacing=args.spacing, equilibrate=args.equilibrate, floor=args.floor,
+                 platform=args.platform, friction=FRICTION, temperature=TEMPERATURE)
+    store = benchmarking.SampleStore(folder, setup)
+    before = sum(len(job["samples"]) for job in store.read()["jobs"].values())
+    keys = [jobKey(systemName, kind, stepFs) for systemName in systems for kind in kinds for stepFs in steps]
+    if not args.report:
+        # Frames for the whole target first (one chain per system, all the workers' threads).
+        chainProperties = benchmarking.cpuProperties(platform, args.threads*args.workers)
+        for systemName in systems:
+            ensureFrames(folder, systemName, molecules, samples, args.spacing, args.equilibrate, platform, chainProperties)
+        deadline = time.time() + (args.hours*3600 if args.hours else float("inf"))
+        workerArgs = (folder, keys, steps, samples, args.chunk, deadline, args.platform, args.threads, protocol)
+        if args.workers == 1:
+            worker(*workerArgs)
+        else:
+            spawn = multiprocessing.get_context("spawn")
+            processes = [spawn.Process(target=worker, args=workerArgs) for _ in range(args.workers)]
+            for process in processes:
+                process.start()
+            for process in processes:
+                process.join()
+        added = sum(len(job["samples"]) for job in store.read()["jobs"].values()) - before
+        store.addRun(dict(date=f"{datetime.datetime.now().astimezone():%Y-%m-%d %H:%M %Z}", commit=benchmarking.commit(),
+                          machine=benchmarking.machine(), workers=args.workers, threads=args.threads, added=added,
+                          command=benchmarking.command()))
+        stamp(f"{added} frame(s) added")
+        if not args.no_timing:
+            for systemName in systems:
+                timeSteps(folder, systemName, kinds, steps, platform, properties, args.timing_repetitions, args.retime)
     document = benchmarking.ResultsDocument("sampling_error", "Configuration-space sampling error against step size",
-                                            quick=quick, platform="CPU", threads=args.threads,
+                                            quick=quick, platform=args.platform, threads=args.threads,
                                             about="Method: the docstring of `benchmarks/sampling_error.py`.")
-    rows, csvRows = [], []
-    for systemName in systems:
-        topology, positions, system = makeSystem(systemName, molecules)
-        stamp(f"{systemName}: {system.getNumParticles()} particles; equilibrium frames")
-        frames = equilibriumFrames(system, positions, platform, properties, samples, args.spacing, args.equilibrate)
-        figureData, results = {}, []
-        for kind in kinds:
-            for stepFs in steps:
-                runner = Runner(kind, stepFs, system, platform, properties, seed=11)
-                count = int(round(protocol/(stepFs*1e-3)))
-                fromEquilibrium, fromResampled, failed = [], [], False
-                for i, (framePositions, box) in enumerate(frames):
-                    first = runner.work(framePositions, box, count, velocitySeed=100 + 2*i)
-                    second = runner.work(None, None, count, velocitySeed=101 + 2*i) if first is not None else None
-                    if first is None or second is None:
-                        failed = True
-                        break
-                    fromEquilibrium.append(first)
-                    fromResampled.append(second)
-                if failed:
-                    stamp(f"{systemName} {kind} {stepFs:g} fs: failed (unstable); larger steps not run")
-                    results.append(dict(kind=kind, stepFs=stepFs))
-                    break
-                kl, error = configurationKL(fromEquilibrium, fromResampled)
-                fired = ("yes" if runner.fired else "no") if kind.startswith("rigid") else ""
-                stamp(f"{systemName} {kind} {stepFs:g} fs: KL {kl:.4g} +- {error:.2g} kT, check fired: {fired or '-'}")
-                results.append(dict(kind=kind, stepFs=stepFs, kl=float(kl), error=float(error), fired=fired))
-                del runner
-        # The cost: at each step, every integrator that ran there, timed side by side (interleaved
-        # blocks, medians), from the first frame with velocities at 300 K.
-        nsDay = {}
-        for stepFs in steps:
-            kindsHere = [r["kind"] for r in results if r["stepFs"] == stepFs and "kl" in r]
-            if not kindsHere:
-                continue
-            integrators, contexts = {}, []
-            for kind in kindsHere:
-                integrators[kind] = timedIntegrator(kind, stepFs)
-                context = openmm.Context(system, integrators[kind], platform, properties)
-                context.setPeriodicBoxVectors(*frames[0][1])
-                context.setPositions(frames[0][0])
-                context.setVelocitiesToTemperature(TEMPERATURE*unit.kelvin, 3)
-                contexts.append(context)
-            wall = benchmarking.timeInterleaved(integrators, max(10, int(round(0.2/(stepFs*1e-3)))), args.timing_repetitions)[0]
-            for kind, seconds in wall.items():
-                nsDay[(kind, stepFs)] = benchmarking.nsPerDay(stepFs, float(np.median(seconds)))
-            stamp(f"{systemName} {stepFs:g} fs, ns/day side by side: " +
-                  ", ".join(f"{kind} {nsDay[(kind, stepFs)]:.2f}" for kind in kindsHere))
-            del integrators, contexts
-        for r in results:
-            if "kl" not in r:
-                rows.append([systemName, r["kind"], f"{r['stepFs']:g}", "unstable", "", ""])
-                continue
-            speed = nsDay[(r["kind"], r["stepFs"])]
-            rows.append([systemName, r["kind"], f"{r['stepFs']:g}", f"{r['kl']:.4g} +- {r['error']:.2g}", f"{speed:.2f}", r["fired"]])
-            csvRows.append(dict(system=systemName, integrator=r["kind"], stepFs=r["stepFs"], kl=r["kl"], error=r["error"],
-                                nsPerDay=float(speed), checkFired=r["fired"]))
-            figureData.setdefault(r["kind"], []).append((speed, r["kl"], r["error"], r["stepFs"]))
-        if figureData:
-            plt = benchmarking.pyplot()
-            figure, axes = plt.subplots(figsize=(6, 4))
-            for kind, points in figureData.items():
-                points = np.array(points)
-                axes.errorbar(points[:, 0], np.maximum(points[:, 1], 1e-6), yerr=points[:, 2], marker="o", label=kind)
-                for x, y, _, step in points:
-                    axes.annotate(f"{step:g}", (x, max(y, 1e-6)), fontsize=7)
-            axes.set_xlabel("ns/day (CPU)")
-            axes.set_ylabel("configuration-space KL divergence (kT)")
-            axes.set_yscale("log")
-            axes.set_title(f"{systemName}: sampling error against speed (labels: step in fs)")
-            axes.legend(fontsize=8)
-            path = document.figurePath(f"sampling_error_{systemName}.png")
-            benchmarking.saveFigure(figure, path)
-            document.figure(path, f"{systemName}: KL divergence against ns/day")
-    document.section("KL divergence and speed",
-                     f"{molecules} waters; {samples} equilibrium frames per system, {protocol:g} ps per half protocol, friction {FRICTION:g}/ps, "
-                     f"{TEMPERATURE:g} K; KL in kT +- one standard error.")
-    document.table(["system", "integrator", "step (fs)", "KL (kT)", "ns/day", "accuracy check fired"], rows)
-    if csvRows:
-        benchmarking.writeCsv(benchmarking.RESULTS/"sampling_error"/("quick" if quick else "full")/"sampling_error.csv", csvRows)
+    report(folder, systems, kinds, steps, quick, document)
     document.write()
 
 

@@ -1,7 +1,12 @@
 """The benchmarks' own helpers where a figure depends on them (benchmarks/benchmarking.py)."""
 
+import json
+import multiprocessing
+import os
 import pathlib
 import re
+import socket
+import subprocess
 import sys
 
 import openmm
@@ -63,3 +68,69 @@ def test_episode_twin(make):
     context.setVelocitiesToTemperature(300, 1)
     twin.step(10)
     assert twin.getShadowWork() != 0.0
+
+
+def test_sample_store_grows_every_job_in_turn(tmp_path):
+    """Claims go to the job with the fewest samples below the target (the first of those on ties), name
+    the missing indices, and a job claimed by a live process is not given out again."""
+    store = benchmarking.SampleStore(tmp_path, {"protocol": 2.0})
+    keys = ["a", "b", "c"]
+    store.add("a", 0, [1.0, 2.0])
+    store.add("a", 2, [1.0, 2.0])
+    store.add("b", 1, [3.0, 4.0])
+    store.add("c", 0, [5.0, 6.0])
+    assert store.claim(keys, 3) == ("b", [0, 2])       # b and c have fewest: the first of them
+    assert store.claim(keys, 3) == ("c", [1, 2])       # b is claimed by this (live) process
+    assert store.claim(keys, 3) == ("a", [1])
+    assert store.claim(keys, 3) is None                # all claimed
+    for key in keys:
+        store.release(key)
+    store.add("b", 0, [0.5, 0.25], fired=False)
+    store.add("b", 2, [0.5, 0.25], fired=True)
+    store.add("b", 3, [0.5, 0.25], fired=False)
+    assert [index for index, _ in store.samples("b")] == [0, 1, 2, 3]
+    assert store.read()["jobs"]["b"]["flags"] == {"fired": True}
+    assert store.claim(["b"], 3) is None               # b has its 3 below the target (and one more)
+    # The same folder opened again sees the same samples; another set-up is refused.
+    assert benchmarking.SampleStore(tmp_path, {"protocol": 2.0}).samples("a") == [(0, [1.0, 2.0]), (2, [1.0, 2.0])]
+    with pytest.raises(ValueError, match="protocol"):
+        benchmarking.SampleStore(tmp_path, {"protocol": 1.0})
+
+
+def test_sample_store_failure_blocks_and_claims_lapse(tmp_path):
+    """A failed job is not run again, nor are the jobs it blocks; a claim of a process that has ended,
+    or one made on another machine, lapses."""
+    store = benchmarking.SampleStore(tmp_path, {})
+    keys = ["2 fs", "4 fs", "6 fs"]
+    blockers = {"2 fs": [], "4 fs": ["2 fs"], "6 fs": ["2 fs", "4 fs"]}.get
+    store.fail("4 fs", 1, "NaN")
+    assert store.claim(keys, 2, blockers) == ("2 fs", [0, 1])
+    assert store.claim(keys, 2, blockers) is None
+    ended = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
+    data = json.loads((tmp_path/"store.json").read_text())
+    data["claims"]["2 fs"] = {"host": socket.gethostname(), "pid": int(ended.stdout), "since": 0.0}
+    (tmp_path/"store.json").write_text(json.dumps(data))
+    assert store.claim(keys, 2, blockers) == ("2 fs", [0, 1])
+    data = json.loads((tmp_path/"store.json").read_text())
+    data["claims"]["2 fs"] = {"host": socket.gethostname() + "-elsewhere", "pid": os.getpid(), "since": 0.0}
+    (tmp_path/"store.json").write_text(json.dumps(data))
+    assert store.claim(keys, 2, blockers) == ("2 fs", [0, 1])
+
+
+def _addSamples(folder, first, count):
+    store = benchmarking.SampleStore(folder)
+    for index in range(first, first + count):
+        store.add("job", index, [float(index)])
+
+
+def test_sample_store_keeps_every_sample_of_concurrent_workers(tmp_path):
+    """Processes adding at once lose nothing: each update reads and writes the whole file under the lock."""
+    benchmarking.SampleStore(tmp_path, {})
+    spawn = multiprocessing.get_context("fork")
+    workers = [spawn.Process(target=_addSamples, args=(tmp_path, 40*i, 40)) for i in range(3)]
+    for worker in workers:
+        worker.start()
+    for worker in workers:
+        worker.join()
+        assert worker.exitcode == 0
+    assert benchmarking.SampleStore(tmp_path).samples("job") == [(index, [float(index)]) for index in range(120)]
