@@ -1,7 +1,6 @@
 """The benchmarks' own helpers where a figure depends on them (benchmarks/benchmarking.py)."""
 
 import json
-import multiprocessing
 import os
 import pathlib
 import re
@@ -117,20 +116,21 @@ def test_sample_store_failure_blocks_and_claims_lapse(tmp_path):
     assert store.claim(keys, 2, blockers) == ("2 fs", [0, 1])
 
 
-def _addSamples(folder, first, count):
-    store = benchmarking.SampleStore(folder)
-    for index in range(first, first + count):
-        store.add("job", index, [float(index)])
+ADD_SAMPLES = """
+import sys
+sys.path.insert(0, sys.argv[1])
+import benchmarking
+store = benchmarking.SampleStore(sys.argv[2])
+first = int(sys.argv[3])
+for index in range(first, first + 40):
+    store.add("job", index, [float(index)])
+"""
 
 
 def test_sample_store_keeps_every_sample_of_concurrent_workers(tmp_path):
     """Processes adding at once lose nothing: each update reads and writes the whole file under the lock."""
     benchmarking.SampleStore(tmp_path, {})
-    spawn = multiprocessing.get_context("fork")
-    workers = [spawn.Process(target=_addSamples, args=(tmp_path, 40*i, 40)) for i in range(3)]
-    for worker in workers:
-        worker.start()
-    for worker in workers:
-        worker.join()
-        assert worker.exitcode == 0
+    workers = [subprocess.Popen([sys.executable, "-c", ADD_SAMPLES, str(ROOT/"benchmarks"), str(tmp_path), str(40*i)])
+               for i in range(3)]
+    assert [worker.wait(timeout=120) for worker in workers] == [0, 0, 0]
     assert benchmarking.SampleStore(tmp_path).samples("job") == [(index, [float(index)]) for index in range(120)]
