@@ -27,7 +27,8 @@ accurate step is the largest h, up to the largest step that ran stably from ever
 the first step whose bias is beyond the tolerance by more than 2 standard errors (which, with the
 larger ones, stays out of the fit), where the fitted |bias| is at most `--tolerance` (0.1 kJ/mol per water: about the spread of independent 20 ps
 runs, 0.25 % of U). The plain rule of nvt_accuracy (largest step within 2 combined standard errors,
-every smaller step too) is given beside it.
+every smaller step too) is given beside it, on U, the density in NPT and g_OO about its first peak
+(the mean of the oxygens' g(r) over 0.265 to 0.295 nm, sampled with U).
 
 What a user gets, from the runs at each configuration's accurate step (the largest run step not
 above it): the oxygen self-diffusion coefficient D (slope of the mean-square displacement between
@@ -69,6 +70,7 @@ from nvt_accuracy import (AMU_PER_NM3_IN_G_PER_ML, BOLTZMANN, FRICTION, SYSTEMS 
 
 RESULTS = BENCHMARK_RESULTS/"inertia_sampling"
 SAMPLE_EVERY = 0.1          # ps
+G_SHELL = (0.265, 0.295)    # nm: the shell about the first maximum of g_OO(r) (0.28 nm) whose mean g is observed
 HEAVY_HYDROGEN = 4.0        # amu: water hydrogens for stock's mass repartitioning, the oxygen lighter by as much
 # The peptide (alanine dipeptide, HBonds, HMR 3 amu, NPT: nvt_accuracy's "protein"): both stock and the
 # rigid integrator fail at 6 fs there (docs/results/nvt_accuracy.md), whatever the waters' masses and moments.
@@ -185,7 +187,7 @@ def simulate(models, state, waters, spec, stepFs, seed, npt, discard, production
     perSample = max(1, int(round(SAMPLE_EVERY/dtPs)))
     samples = int(round(production/(perSample*dtPs)))
     discardSteps = int(round(discard/dtPs))
-    data = {"potential": [], "density": [], "temperature": []}
+    data = {"potential": [], "density": [], "temperature": [], "gShell": []}
     oxygens, axes, boxes = [], [], []
     progress = Progress(f"{spec[0]} {stepFs:g} fs", discardSteps + samples*perSample)
     failure = ""
@@ -206,6 +208,7 @@ def simulate(models, state, waters, spec, stepFs, seed, npt, discard, production
             data["density"].append(totalMass/np.linalg.det(box)*AMU_PER_NM3_IN_G_PER_ML)
             data["temperature"].append(2*kinetic/(dof*BOLTZMANN))
             oxygen = positions[waters.oxygens]
+            data["gShell"].append(shellPairDensity(oxygen, np.diag(box)))
             axis = positions[waters.hydrogens].mean(axis=1) - oxygen
             oxygens.append(oxygen)
             axes.append(axis/np.linalg.norm(axis, axis=1)[:, None])
@@ -214,6 +217,20 @@ def simulate(models, state, waters, spec, stepFs, seed, npt, discard, production
     except openmm.OpenMMException as error:
         failure = str(error).splitlines()[0][:160]
     return data, np.array(oxygens), np.array(axes), np.array(boxes), failure
+
+
+def shellPairDensity(oxygens, edges):
+    """g_OO(r) averaged over the shell G_SHELL: the oxygen pairs at those distances (minimum image in the
+    rectangular box of these edges, nm) over the number an ideal gas of the same density would have
+    there. About the height of g_OO's first peak: the water structure that a too-large step (hot
+    librations) flattens."""
+    delta = oxygens[:, None, :] - oxygens[None, :, :]
+    delta -= edges*np.round(delta/edges)
+    distances = np.sqrt(np.sum(delta**2, axis=-1))[np.triu_indices(len(oxygens), k=1)]
+    pairs = np.count_nonzero((distances >= G_SHELL[0]) & (distances < G_SHELL[1]))
+    n = len(oxygens)
+    ideal = 0.5*n*(n - 1)/np.prod(edges)*4/3*np.pi*(G_SHELL[1]**3 - G_SHELL[0]**3)
+    return pairs/ideal
 
 
 # ---------------------------------------------------------------------------------------------------
@@ -357,6 +374,8 @@ def pooled(runs, key):
 def analyse(result):
     runs = result["runs"]
     keys = ("potential", "density") if result["npt"] else ("potential",)
+    if all("gShell" in r for r in runs if not r["failure"]):  # (runs made before 2026-12-03 lack it)
+        keys += ("gShell",)
     good = lambda label, step: [r for r in runs if r["config"] == label and r["step"] == step and not r["failure"]]
 
     def referenceOf(labels):
@@ -549,16 +568,22 @@ def report(results, quick):
                       f"Tolerance {result['tolerance']:g} kJ/mol per water; {len({r['start'] for r in result['runs']})} "
                       f"starts of {result['waters']} waters; wall time {result.get('seconds', 0)/60:.0f} min.")
         rows = []
+        shell = any("gShell" in p for entry in result["summary"].values() for p in entry["points"])
+        biasOf = lambda p, key: f"{p[key][2]:+.3f} ({p[key][2]/p[key][3]:+.1f} sigma)"
         for label, entry in result["summary"].items():
             for p in entry["points"]:
-                rows.append([label, f"{p['step']:g}", f"{p['potential'][0]:.3f} +- {p['potential'][1]:.3f}",
-                             f"{p['potential'][2]:+.3f} ({p['potential'][2]/p['potential'][3]:+.1f} sigma)",
-                             f"{p['temperature'][0]:.1f}", f"{p['D']:.2f}", f"{p['tauRot']:.2f}", f"{p['tauU']:.2f}"])
+                rows.append([label, f"{p['step']:g}", f"{p['potential'][0]:.3f} +- {p['potential'][1]:.3f}", biasOf(p, "potential")]
+                            + ([f"{p['gShell'][0]:.3f}", biasOf(p, "gShell")] if shell else [])
+                            + [f"{p['temperature'][0]:.1f}", f"{p['D']:.2f}", f"{p['tauRot']:.2f}", f"{p['tauU']:.2f}"])
             failures = sorted({(r["step"], r["failure"]) for r in result["runs"] if r["config"] == label and r["failure"]})
             for step, failure in failures[:1]:
-                rows.append([label, f"{step:g}", "unstable: " + failure[:70], "", "", "", "", ""])
-        document.table(["configuration", "step (fs)", "U/water (kJ/mol)", "bias", "T (K)", "D (1e-5 cm^2/s)", "tau_1 (ps)",
-                        "tau_U (ps)"], rows)
+                rows.append([label, f"{step:g}", "unstable: " + failure[:70]] + [""]*(7 if shell else 5))
+        document.table(["configuration", "step (fs)", "U/water (kJ/mol)", "bias"]
+                       + ([f"g_OO, {G_SHELL[0]:g}-{G_SHELL[1]:g} nm", "its bias"] if shell else [])
+                       + ["T (K)", "D (1e-5 cm^2/s)", "tau_1 (ps)", "tau_U (ps)"], rows)
+        if shell:
+            document.text(f"g_OO: the mean of the oxygens' g(r) over {G_SHELL[0]:g} to {G_SHELL[1]:g} nm, about its first peak "
+                          "(shellPairDensity()); the 2-sigma rule reads it with U (and the density in NPT).")
         for label, entry in result["summary"].items():
             timed = result.get("timed", {}).get(label)
             if timed and entry["accurateStep"]:

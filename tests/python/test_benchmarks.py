@@ -8,6 +8,7 @@ import socket
 import subprocess
 import sys
 
+import numpy as np
 import openmm
 import pytest
 
@@ -134,3 +135,21 @@ def test_sample_store_keeps_every_sample_of_concurrent_workers(tmp_path):
                for i in range(3)]
     assert [worker.wait(timeout=120) for worker in workers] == [0, 0, 0]
     assert benchmarking.SampleStore(tmp_path).samples("job") == [(index, [float(index)]) for index in range(120)]
+
+
+def test_shell_pair_density():
+    """inertia_sampling's g_OO over its shell: exact on a simple cubic lattice whose nearest neighbours
+    fall in the shell, and 1 within its statistics for an ideal gas."""
+    inertia = pytest.importorskip("inertia_sampling")
+    low, high = inertia.G_SHELL
+    spacing, cells = 0.5*(low + high), 8
+    grid = np.arange(cells)*spacing
+    lattice = np.stack(np.meshgrid(grid, grid, grid, indexing="ij"), axis=-1).reshape(-1, 3)
+    edges = np.full(3, cells*spacing)
+    n = len(lattice)
+    ideal = 0.5*n*(n - 1)/np.prod(edges)*4/3*np.pi*(high**3 - low**3)
+    assert inertia.shellPairDensity(lattice + 0.01, edges) == pytest.approx(3*n/ideal, rel=1e-12)  # 6 neighbours each
+    rng = np.random.default_rng(5)
+    values = [inertia.shellPairDensity(rng.uniform(0, 2.5, (500, 3)), np.full(3, 2.5)) for _ in range(20)]
+    # An ideal gas of 500 in (2.5 nm)^3 has about 236 pairs in the shell: 20 frames give 1 +- 0.015.
+    assert abs(np.mean(values) - 1) < 0.06
