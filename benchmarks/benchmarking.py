@@ -476,8 +476,8 @@ class SampleStore:
     processes add to it at once.
 
     The computation is a set of jobs (string keys); a job's samples are numbered (a sample index
-    names its input, e.g. an equilibrium frame, so a sample is never computed twice) and each is a
-    list of numbers. A job fails at a sample (an unstable run): it then takes no more samples, and
+    names its input, e.g. an equilibrium frame or a start, so a sample is never computed twice) and
+    each is a list of numbers or a dict. A job fails at a sample (an unstable run): it then takes no more samples, and
     jobs that name it as a blocker are not run either. A worker claims one job at a time, the one with
     the fewest samples below the target (earliest in the given order on ties), so every job grows
     together and an interrupted run leaves an even table. A claim lapses with its process, and a
@@ -577,10 +577,11 @@ class SampleStore:
             return key, [index for index in range(target) if str(index) not in have]
 
     def add(self, key, index, values, **flags):
-        """Record a sample; flags (booleans) are or-ed into the job's (e.g. whether a check fired)."""
+        """Record a sample: a list of numbers, or a dict (kept as JSON gives it back); flags (booleans)
+        are or-ed into the job's (e.g. whether a check fired)."""
         with self._locked() as data:
             job = self._job(data, key)
-            job["samples"][str(index)] = [float(value) for value in values]
+            job["samples"][str(index)] = json.loads(json.dumps(values)) if isinstance(values, dict) else [float(v) for v in values]
             for name, value in flags.items():
                 job["flags"][name] = bool(job["flags"].get(name, False) or value)
 

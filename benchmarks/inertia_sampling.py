@@ -54,6 +54,8 @@ docs/results/inertia_sampling.md and docs/figures/inertia_sampling_<system>.png.
 
 import argparse
 import json
+import multiprocessing
+import shutil
 import sys
 import time
 
@@ -62,13 +64,15 @@ import openmm
 from openmm import app, unit
 
 import openmmrigid
-from benchmarking import (RESULTS as BENCHMARK_RESULTS, Progress, ResultsDocument, blockMean, checkDuty, episodeTwin, header,
+from benchmarking import (ROOT, RESULTS as BENCHMARK_RESULTS, Progress, ResultsDocument, SampleStore, blockMean, checkDuty, episodeTwin, header,
                           EPISODE, nsPerDay, openLog, productionSeconds, pyplot, say, stamp, timeInterleaved,
                           TimingFailure)
 from nvt_accuracy import (AMU_PER_NM3_IN_G_PER_ML, BOLTZMANN, FRICTION, SYSTEMS as NVT_SYSTEMS, TEMPERATURE, buildModel,
                           equilibrate, stockDegreesOfFreedom, withoutBarostat)
 
 RESULTS = BENCHMARK_RESULTS/"inertia_sampling"
+STORES = ROOT/"benchmarks"/"stores"/"inertia_sampling"   # every system's runs, kept in git (storeOf())
+START_SPACING = 5.0         # ps of stock at 2 fs from one start to the next (ensureStarts())
 SAMPLE_EVERY = 0.1          # ps
 G_SHELL = (0.265, 0.295)    # nm: the shell about the first maximum of g_OO(r) (0.28 nm) whose mean g is observed
 HEAVY_HYDROGEN = 4.0        # amu: water hydrogens for stock's mass repartitioning, the oxygen lighter by as much
@@ -283,86 +287,262 @@ def autocorrelationTime(values):
 # ---------------------------------------------------------------------------------------------------
 
 
-def prepare(name, args, platform, properties):
-    """The system's spec, Topology, its System (NPT or NVT) and the equilibrated state its runs start from."""
+def build(name):
+    """The system's spec, Topology, the System its runs use (NPT or NVT), and the NPT System and the
+    positions it is equilibrated from."""
     spec = SYSTEMS[name]
     topology, positions, nptSystem = buildModel(spec["model"], spec["protein"])
-    stamp(f"{name}: {spec['title']}: minimizing and equilibrating {args.equilibrate:g} ps (stock, 2 fs)")
-    state = equilibrate(nptSystem, positions, platform, properties, args.equilibrate)
-    return spec, topology, (nptSystem if spec["npt"] else withoutBarostat(nptSystem)), state
+    return spec, topology, (nptSystem if spec["npt"] else withoutBarostat(nptSystem)), nptSystem, positions
 
 
-def runSystem(name, args, platform, properties):
-    started = time.perf_counter()
-    spec, topology, system, state = prepare(name, args, platform, properties)
+def storeOf(name, args):
+    """The system's runs, kept between sessions (benchmarking.SampleStore): a job is a configuration at
+    a step, its samples the runs from each start (the start's index)."""
+    folder = (RESULTS/"quick"/"stores" if args.quick else STORES)/name
+    return SampleStore(folder, dict(time=args.time, discard=args.discard, equilibrate=args.equilibrate,
+                                    sampleEvery=SAMPLE_EVERY, startSpacing=START_SPACING))
+
+
+def jobKey(label, stepFs):
+    return f"{label}|{stepFs:g}"
+
+
+def jobKeys(configs):
+    return [jobKey(label, step) for label, config in configs.items() for step in config[4]]
+
+
+def blockersIn(configs):
+    """A configuration's step is not run once a smaller step of it failed from some start."""
+    def blockers(key):
+        label, step = key.split("|")
+        return [jobKey(label, smaller) for smaller in configs[label][4] if smaller < float(step)]
+    return blockers
+
+
+def startPath(store, index, rigid=False):
+    return store.folder/f"{'rigid-' if rigid else ''}start-{index}.xml"
+
+
+def loadState(path):
+    return openmm.XmlSerializer.deserialize(path.read_text())
+
+
+def ensureStarts(name, store, indices, args, platform, properties):
+    """The start states these indices need, made and saved where missing. Start 0: the system minimized
+    and equilibrated (nvt_accuracy.equilibrate(): NPT, stock, 2 fs); start k: start k - 1 continued
+    START_SPACING ps by stock at 2 fs in the system's ensemble (seed k). With the rigid solute, the
+    rigid integrator's start k is start k continued 3 ps by it (start 0: start 0 itself), so that each
+    of its runs has the solute's shape of that state (a body takes the shape it has when the Context is
+    made), the one model it samples."""
+    if not indices:
+        return
+    spec, topology, system, nptSystem, positions = build(name)
+    for k in range(max(indices) + 1):
+        path = startPath(store, k)
+        if path.exists():
+            continue
+        if k == 0:
+            stamp(f"{name}: {spec['title']}: minimizing and equilibrating {args.equilibrate:g} ps (stock, 2 fs)")
+            state = equilibrate(nptSystem, positions, platform, properties, args.equilibrate)
+        else:
+            stamp(f"{name}: start {k}: start {k - 1} and {START_SPACING:g} ps (stock, 2 fs)")
+            integrator = openmm.LangevinMiddleIntegrator(TEMPERATURE, FRICTION, 2*unit.femtoseconds)
+            integrator.setRandomNumberSeed(k)
+            if spec["npt"]:
+                system.getForce(system.getNumForces() - 1).setRandomNumberSeed(k)
+            context = openmm.Context(system, integrator, platform, properties)
+            context.setState(loadState(startPath(store, k - 1)))
+            context.setVelocitiesToTemperature(TEMPERATURE, k)
+            integrator.step(int(round(START_SPACING/0.002)))
+            state = context.getState(getPositions=True, getVelocities=True)
+            del context
+        path.write_text(openmm.XmlSerializer.serialize(state))
+    if spec.get("rigidSolute"):
+        models = Models(system, topology, True)
+        rigidConfig = configurations([], False, True, True)["rigid"]
+        for k in indices:
+            path = startPath(store, k, rigid=True)
+            if path.exists():
+                continue
+            if k == 0:
+                path.write_text(startPath(store, 0).read_text())
+                continue
+            integrator = makeIntegrator(rigidConfig, 2, k, models.bodies)
+            context = openmm.Context(models.rigid, integrator, platform, properties)
+            context.setState(loadState(startPath(store, k)))
+            context.setVelocitiesToTemperature(TEMPERATURE, k)
+            integrator.step(1500)
+            path.write_text(openmm.XmlSerializer.serialize(context.getState(getPositions=True, getVelocities=True)))
+            del context
+
+
+def worker(name, folder, configs, target, deadline, args):
+    """Claim jobs (a configuration at a step) and run them from their next start, until every job has
+    `target` starts or the deadline passes."""
+    store = SampleStore(folder)
+    platform = openmm.Platform.getPlatformByName(args.platform)
+    properties = {"Threads": str(args.threads)} if args.platform == "CPU" and args.threads else {}
+    spec, topology, system, _, _ = build(name)
     rigidSolute = spec.get("rigidSolute", False)
     models = Models(system, topology, rigidSolute)
     waters = Waters(topology)
-    configs = configurations(args.floors, args.quick, spec["protein"], rigidSolute)
-    # The starts: 3 ps more of the equilibrated state each. With the rigid solute the rigid integrator
-    # makes its own from the same state, so that every one of its runs has the solute's shape of that
-    # state (a body takes the shape it has when the Context is made), the one model it samples.
-    starts, rigidStarts = [state], [state]
-    for start in range(1, args.starts):
-        for rigid in ((False, True) if rigidSolute else (False,)):
-            if rigid:
-                integrator = makeIntegrator(configs["rigid"], 2, start, models.bodies)
+    labels, keys, blockers = list(configs), jobKeys(configs), blockersIn(configs)
+    while time.time() < deadline:
+        claimed = store.claim(keys, target, blockers)
+        if claimed is None:
+            return
+        key, missing = claimed
+        label, stepFs = key.split("|")
+        stepFs, config, start = float(stepFs), configs[label], missing[0]
+        stepFs = int(stepFs) if stepFs.is_integer() else stepFs
+        try:
+            state = loadState(startPath(store, start, rigid=rigidSolute and config[1]))
+            seed = 1000*start + 10*labels.index(label) + config[4].index(stepFs) + 1
+            data, oxygens, axes, boxes, failure = simulate(models, state, waters, config, stepFs, seed, spec["npt"],
+                                                           args.discard, args.time, platform, properties)
+            if failure or len(data["potential"]) < 20:
+                store.fail(key, start, failure or "too few samples")
+                say(f"  {label} {stepFs:g} fs start {start}: unstable ({failure or 'too few samples'})")
             else:
-                integrator = openmm.LangevinMiddleIntegrator(TEMPERATURE, FRICTION, 2*unit.femtoseconds)
-                integrator.setRandomNumberSeed(start)
-            context = openmm.Context(models.rigid if rigid else system, integrator, platform, properties)
-            context.setState(state)
-            context.setVelocitiesToTemperature(TEMPERATURE, start)
-            integrator.step(1500)
-            (rigidStarts if rigid else starts).append(context.getState(getPositions=True, getVelocities=True))
+                run = {quantity: [float(v) for v in blockMean(values)] for quantity, values in data.items()}
+                run.update(D=diffusion(oxygens, boxes), tauRot=rotationalTime(axes), tauU=autocorrelationTime(data["potential"]))
+                store.add(key, start, run)
+                say(f"  {label} {stepFs:g} fs start {start}: U/water {run['potential'][0]:.3f} +- {run['potential'][1]:.3f}, "
+                    f"T {run['temperature'][0]:.1f} K, D {run['D']:.2f}, tau_1 {run['tauRot']:.2f} ps, tau_U {run['tauU']:.2f} ps")
+        finally:
+            store.release(key)
+
+
+def resultOf(name, store, tolerance):
+    """The system's result for analyse() and report(), from its store: the runs from the starts that
+    every running job has (a failed job keeps its runs and its failure; the steps it blocks are
+    "not run"), the configurations, the timing and the runs that made the samples."""
+    spec = SYSTEMS[name]
+    data = store.read()
+    notes = data.get("notes", {})
+    configs = notes.get("configs", {})
+    keys, blockers = jobKeys(configs), blockersIn(configs)
+    jobs = data["jobs"]
+    running = [key for key in keys if jobs.get(key, {}).get("failed") is None and not SampleStore.blocked(data, key, blockers(key))]
+    # Each configuration with the starts all its running steps have (a configuration added later
+    # catches up on its own).
+    startsOf = {label: min((len(jobs.get(key, {}).get("samples", {})) for key in running if key.startswith(label + "|")),
+                           default=0) for label in configs}
     runs = []
-    for index, (label, config) in enumerate(configs.items()):
-        for start, startState in enumerate(rigidStarts if rigidSolute and config[1] else starts):
-            failed = False
-            for stepFs in config[4]:
-                if failed:
-                    runs.append(dict(config=label, step=stepFs, start=start, failure="not run (unstable at a smaller step)"))
-                    continue
-                seed = 1000*start + 10*index + config[4].index(stepFs) + 1
-                data, oxygens, axes, boxes, failure = simulate(models, startState, waters, config,
-                                                               stepFs, seed, spec["npt"], args.discard, args.time, platform,
-                                                               properties)
-                run = dict(config=label, step=stepFs, start=start, failure=failure)
-                if failure or len(data["potential"]) < 20:
-                    run["failure"] = failure or "too few samples"
-                    failed = True
-                    say(f"  {label} {stepFs:g} fs start {start}: unstable ({run['failure']})")
-                else:
-                    run.update({key: [float(v) for v in blockMean(values)] for key, values in data.items()})
-                    run.update(D=diffusion(oxygens, boxes), tauRot=rotationalTime(axes),
-                               tauU=autocorrelationTime(data["potential"]))
-                    say(f"  {label} {stepFs:g} fs start {start}: U/water {run['potential'][0]:.3f} +- {run['potential'][1]:.3f}, "
-                        f"T {run['temperature'][0]:.1f} K, D {run['D']:.2f}, tau_1 {run['tauRot']:.2f} ps, tau_U {run['tauU']:.2f} ps")
-                runs.append(run)
-    result = dict(name=name, title=spec["title"], npt=spec["npt"], waters=waters.count, runs=runs, separateModels=rigidSolute,
-                  provenance=header(platform.getName(), args.threads or None),
-                  configs={label: list(config) for label, config in configs.items()}, tolerance=args.tolerance)
+    for key in keys:
+        label, step = key.split("|")
+        starts = startsOf[label]
+        step = int(float(step)) if float(step).is_integer() else float(step)
+        job = jobs.get(key, {"samples": {}, "failed": None})
+        if SampleStore.blocked(data, key, blockers(key)):
+            runs += [dict(config=label, step=step, start=start, failure="not run (unstable at a smaller step)")
+                     for start in range(starts)]
+            continue
+        for index, run in job["samples"].items():
+            if int(index) < starts or job["failed"] is not None:
+                runs.append(dict(run, config=label, step=step, start=int(index), failure=""))
+        if job["failed"] is not None:
+            runs.append(dict(config=label, step=step, start=job["failed"]["sample"], failure=job["failed"]["reason"]))
+    waters = notes.get("waters")
+    if waters is None:
+        waters = Waters(buildModel(spec["model"], spec["protein"])[0]).count
+        store.note("waters", waters)
+    result = dict(name=name, title=spec["title"], npt=spec["npt"], waters=waters, runs=runs, starts=startsOf,
+                  separateModels=spec.get("rigidSolute", False), configs=configs, tolerance=tolerance, history=data["runs"],
+                  store=str(store.folder.relative_to(ROOT) if store.folder.is_relative_to(ROOT) else store.folder))
+    for field in ("timed", "timingFailures", "retimed"):
+        if field in notes:
+            result[field] = notes[field]
     analyse(result)
-    # Saved before the timing, so that a failure there loses no sampling (--report re-reads it).
-    (args.folder/f"{name}.json").write_text(json.dumps(result, indent=1))
-    stamp(f"{name}: accurate steps " + ", ".join(f"{label} {entry['accurateStep']}" for label, entry in result["summary"].items())
-          + "; timing")
-    timing(result, models, state, configs, platform, properties, args)
-    result["seconds"] = time.perf_counter() - started
     return result
 
 
-def retimeSystem(name, args, platform, properties):
-    """The saved result of a system with its timing measured again (the system built and equilibrated as
-    for its runs; the sampling and its analysis are kept)."""
-    result = json.loads((args.folder/f"{name}.json").read_text())
-    stamp(f"{name}: timing again")
-    spec, topology, system, state = prepare(name, args, platform, properties)
-    analyse(result)
-    timing(result, Models(system, topology, spec.get("rigidSolute", False)), state, result["configs"], platform, properties,
-           args)
-    result["retimed"] = header(platform.getName(), args.threads or None)
+def importResults(name, store, path):
+    """Put the runs of a result saved before the stores (benchmarks/results/inertia_sampling/full/<name>.json)
+    into the store, with its timing and provenance; a store that has samples already is left alone."""
+    data = store.read()
+    if data["jobs"]:
+        say(f"{name}: the store has samples already; {path} not imported")
+        return
+    result = json.loads(path.read_text())
+    command = next((line for line in result.get("provenance", []) if line.startswith("command:")), "")
+    if any(option in command for option in ("--time", "--discard", "--equilibrate", "--quick")):
+        raise ValueError(f"{path} was made with other run lengths than the store's ({command})")
+    added = 0
+    for run in result["runs"]:
+        key = jobKey(run["config"], run["step"])
+        if run["failure"].startswith("not run"):
+            continue
+        if run["failure"]:
+            store.fail(key, run["start"], run["failure"])
+        else:
+            store.add(key, run["start"], {k: v for k, v in run.items() if k not in ("config", "step", "start", "failure")})
+            added += 1
+    store.note("configs", result["configs"])
+    store.note("waters", result["waters"])
+    for field in ("timed", "timingFailures", "retimed"):
+        if field in result:
+            store.note(field, result[field])
+    fields = dict(line.split(": ", 1) for line in result.get("provenance", []) if ": " in line)
+    store.addRun(dict(date=fields.get("date", ""), commit=fields.get("commit", ""), machine=fields.get("machine", ""),
+                      platform=fields.get("platform", ""), added=added, seconds=result.get("seconds", 0.0),
+                      command=fields.get("command", "").strip("`")))
+    say(f"{name}: imported {added} runs from {path}")
+
+
+def runSystem(name, args, platform, properties):
+    """Add starts to the system's store until every job has --starts (or --hours pass), then analyse
+    and, where it is not timed yet (or with --retime), time it."""
+    started = time.perf_counter()
+    store = storeOf(name, args)
+    spec = SYSTEMS[name]
+    configs = configurations(args.floors, args.quick, spec["protein"], spec.get("rigidSolute", False))
+    known = store.read().get("notes", {}).get("configs", {})
+    store.note("configs", dict(known, **{label: list(config) for label, config in configs.items()}))
+    data = store.read()
+    before = sum(len(job["samples"]) for job in data["jobs"].values())
+    blockers = blockersIn(configs)
+    needed = sorted({start for key in jobKeys(configs)
+                     if data["jobs"].get(key, {}).get("failed") is None and not SampleStore.blocked(data, key, blockers(key))
+                     for start in range(args.starts) if str(start) not in data["jobs"].get(key, {}).get("samples", {})})
+    chainProperties = {"Threads": str(args.threads*args.workers)} if args.platform == "CPU" and args.threads else properties
+    ensureStarts(name, store, needed, args, platform, chainProperties)
+    deadline = time.time() + (args.hours*3600 if args.hours else float("inf"))
+    workerArgs = (name, store.folder, configs, args.starts, deadline, args)
+    if args.workers == 1:
+        worker(*workerArgs)
+    else:
+        spawn = multiprocessing.get_context("spawn")
+        processes = [spawn.Process(target=worker, args=workerArgs) for _ in range(args.workers)]
+        for process in processes:
+            process.start()
+        for process in processes:
+            process.join()
+    added = sum(len(job["samples"]) for job in store.read()["jobs"].values()) - before
+    fields = dict(line.split(": ", 1) for line in header(platform.getName(), args.threads or None))
+    store.addRun(dict(date=fields["date"], commit=fields["commit"], machine=fields["machine"], platform=fields["platform"]
+                      + (f", {args.workers} workers" if args.workers > 1 else ""), added=added,
+                      seconds=time.perf_counter() - started, command=fields["command"].strip("`")))
+    result = resultOf(name, store, args.tolerance)
+    stamp(f"{name}: {added} runs added; starts " + ", ".join(f"{label} {count}" for label, count in result["starts"].items())
+          + "; accurate steps "
+          + ", ".join(f"{label} {entry['accurateStep']}" for label, entry in result["summary"].items()))
+    if not args.no_timing and ("timed" not in result or args.retime):
+        timeSystem(name, store, result, args, platform, properties)
     return result
+
+
+def timeSystem(name, store, result, args, platform, properties):
+    """Time the system at its accurate steps (timing()) from start 0, and keep the timing in the store."""
+    ensureStarts(name, store, [0], args, platform, properties)
+    spec, topology, system, _, _ = build(name)
+    stamp(f"{name}: timing")
+    result.pop("timingFailures", None)
+    timing(result, Models(system, topology, spec.get("rigidSolute", False)), loadState(startPath(store, 0)), result["configs"],
+           platform, properties, args)
+    store.note("timed", result["timed"])
+    store.note("timingFailures", result.get("timingFailures", {}))
+    store.note("retimed", header(platform.getName(), args.threads or None))
 
 
 def pooled(runs, key):
@@ -400,7 +580,7 @@ def analyse(result):
     summary = {}
     for label, config in result["configs"].items():
         reference = references[bool(config[1])]
-        starts = len({r["start"] for r in runs})
+        starts = len({r["start"] for r in runs if r["config"] == label})
         points = []
         for step in config[4]:
             done = good(label, step)
@@ -547,16 +727,21 @@ def perWallHour(entry):
 
 def report(results, quick):
     document = ResultsDocument("inertia_sampling", "Sampling speed with raised moments of inertia", quick=quick,
-                               about=__doc__.split("\n\n")[0].replace("\n", " "),
-                               provenance=results[0].get("provenance") if results else None)
+                               about=__doc__.split("\n\n")[0].replace("\n", " "))
     for result in results:
         if "timed" not in result:  # saved before the timed costs were kept apart from the analysis
             result["timed"] = {label: dict(step=entry["timedStep"], msPerStep=entry["msPerStep"])
                                for label, entry in result["summary"].items() if "timedStep" in entry}
         analyse(result)
         document.section(result["title"])
-        if result.get("provenance"):
-            document.text("This system's run: " + "; ".join(result["provenance"]) + ".")
+        history = result.get("history", [])
+        if history:
+            document.text(f"Runs that made these samples ({result['store']}): "
+                          + "; ".join(f"{run['date']}, commit {run['commit']}, {run['platform']}, {run['added']} runs added "
+                                      f"in {run['seconds']/60:.0f} min, `{run['command']}`" for run in history) + ".")
+        if "potential" not in result["reference"]:
+            document.text("No run at 2 fs has finished yet: no reference, nothing to compare.")
+            continue
         reference = result["reference"]["potential"]
         check = result.get("referenceCheck")
         rigidReference = result.get("rigidReference", {}).get("potential")
@@ -565,8 +750,8 @@ def report(results, quick):
                       + (f" of stock; the rigid integrator's model, whose solute is one body without its internal terms: "
                          f"{rigidReference[0]:.3f} +- {rigidReference[1]:.3f}, its own 2 fs runs" if rigidReference else "")
                       + "). "
-                      f"Tolerance {result['tolerance']:g} kJ/mol per water; {len({r['start'] for r in result['runs']})} "
-                      f"starts of {result['waters']} waters; wall time {result.get('seconds', 0)/60:.0f} min.")
+                      f"Tolerance {result['tolerance']:g} kJ/mol per water; {result['waters']} waters; starts per configuration: "
+                      + ", ".join(f"{label} {count}" for label, count in result["starts"].items()) + ".")
         rows = []
         shell = any("gShell" in p for entry in result["summary"].values() for p in entry["points"])
         biasOf = lambda p, key: f"{p[key][2]:+.3f} ({p[key][2]/p[key][3]:+.1f} sigma)"
@@ -664,35 +849,52 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--systems", nargs="+", default=["tip3p-nvt"], choices=list(SYSTEMS))
     parser.add_argument("--floors", nargs="+", type=float, default=[0.04], help="minimum moments to try (amu nm^2)")
-    parser.add_argument("--starts", type=int, default=2)
+    parser.add_argument("--starts", type=int, default=2, help="starts every configuration and step is to have (in total, over runs)")
     parser.add_argument("--time", type=float, default=20.0, help="ps sampled per run")
     parser.add_argument("--discard", type=float, default=2.0, help="ps discarded per run")
     parser.add_argument("--equilibrate", type=float, default=20.0, help="ps of stock NPT equilibration")
     parser.add_argument("--tolerance", type=float, default=0.1, help="accepted |bias| of U per water (kJ/mol)")
     parser.add_argument("--platform", default="CPU")
-    parser.add_argument("--threads", type=int, default=0)
+    parser.add_argument("--threads", type=int, default=0, help="CPU threads per worker")
+    parser.add_argument("--workers", type=int, default=1, help="worker processes running at once")
+    parser.add_argument("--hours", type=float, default=None, help="start no run after this long (the report is still written)")
+    parser.add_argument("--no-timing", action="store_true", help="leave the timing for a run on a quiet machine")
     parser.add_argument("--timing-steps", type=int, default=100)
     parser.add_argument("--timing-repetitions", type=int, default=7)
     parser.add_argument("--timing-contexts", type=int, default=2, help="Contexts timed per configuration, pooled")
-    parser.add_argument("--quick", action="store_true", help="a smoke check: short runs, few steps, one start")
-    parser.add_argument("--report", action="store_true", help="only write the report from the saved systems")
+    parser.add_argument("--quick", action="store_true", help="a smoke check: short runs, few steps, one start, a fresh store")
+    parser.add_argument("--report", action="store_true", help="only write the report from the stores")
     parser.add_argument("--retime", action="store_true",
-                        help="time the saved systems of --systems again (their sampling kept), then write the report")
+                        help="time the systems of --systems again (their sampling kept), then write the report")
+    parser.add_argument("--import-results", action="store_true",
+                        help="put the results of --systems saved before the stores (benchmarks/results/inertia_sampling/full) "
+                             "into their empty stores")
     args = parser.parse_args()
     if args.quick:
         args.starts, args.time, args.discard, args.equilibrate = 1, 2.0, 0.5, 2.0
         args.timing_steps, args.timing_repetitions = 10, 3
-    folder = args.folder = RESULTS/("quick" if args.quick else "full")
+    folder = RESULTS/("quick" if args.quick else "full")
     folder.mkdir(parents=True, exist_ok=True)
+    stores = RESULTS/"quick"/"stores" if args.quick else STORES
     if not args.report:
         openLog(folder/("retime.txt" if args.retime else "log.txt"))
         platform = openmm.Platform.getPlatformByName(args.platform)
         properties = {"Threads": str(args.threads)} if args.platform == "CPU" and args.threads else {}
         for name in args.systems:
-            result = retimeSystem(name, args, platform, properties) if args.retime else runSystem(name, args, platform, properties)
-            (folder/f"{name}.json").write_text(json.dumps(result, indent=1))
-    results = [json.loads(path.read_text()) for path in sorted(folder.glob("*.json"))]
-    report(results, args.quick)
+            if args.quick and (stores/name).exists():
+                shutil.rmtree(stores/name)
+            store = storeOf(name, args)
+            if args.import_results:
+                importResults(name, store, RESULTS/"full"/f"{name}.json")
+            elif args.retime:
+                timeSystem(name, store, resultOf(name, store, args.tolerance), args, platform, properties)
+            else:
+                runSystem(name, args, platform, properties)
+    results = [resultOf(path.parent.name, SampleStore(path.parent), args.tolerance)
+               for path in sorted(stores.glob("*/store.json")) if path.parent.name in SYSTEMS]
+    for result in results:
+        (folder/f"{result['name']}.json").write_text(json.dumps(result, indent=1))
+    report([result for result in results if result["runs"]], args.quick)
 
 
 if __name__ == "__main__":
