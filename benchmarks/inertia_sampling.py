@@ -44,12 +44,22 @@ first picoseconds are all episode. Effective samples per wall-hour: simulated ps
 
     python benchmarks/inertia_sampling.py --quick                  # smoke check, about 5 minutes
     python benchmarks/inertia_sampling.py --systems tip3p-nvt --starts 2 --threads 2
-    python benchmarks/inertia_sampling.py --systems rigid-solute --starts 2 --floors 0.04 --threads 2
-    python benchmarks/inertia_sampling.py --report                 # the report from the saved systems
+    python benchmarks/inertia_sampling.py --systems tip3p-npt --starts 6 --workers 2 --threads 1 --hours 2 --no-timing
+    python benchmarks/inertia_sampling.py --report                 # the report from the stores
     python benchmarks/inertia_sampling.py --retime --systems tip3p-npt --threads 2   # new timing, same sampling
 
-Results: benchmarks/results/inertia_sampling/<mode>/<system>.json and a log; a full run writes
-docs/results/inertia_sampling.md and docs/figures/inertia_sampling_<system>.png.
+The runs are kept between sessions: each system's in benchmarks/stores/inertia_sampling/<system>/
+(benchmarking.SampleStore, committed with the code: a job is a configuration at a step, its samples
+the runs from each start, with the start states), so `--starts` is the total a system is to reach and
+a run adds what is missing, every job in turn, the fewest starts first, until `--hours` pass. Start 0
+is the equilibrated system, start k start k - 1 continued 5 ps by stock at 2 fs. A configuration is
+reported with the starts all its steps have. A system is timed when it has no timing yet, or with
+`--retime` (the timing is kept in its store); `--no-timing` leaves it for a quiet machine. The runs
+of 2026-12-02 and 2026-12-03 made before the stores (their starts 3 ps from one equilibrated state)
+were put into the stores with `--import-results`.
+
+Results: the stores; benchmarks/results/inertia_sampling/<mode>/<system>.json (each system's analysis)
+and a log; a full run writes docs/results/inertia_sampling.md and docs/figures/inertia_sampling_<system>.png.
 """
 
 import argparse
