@@ -17,6 +17,7 @@ import datetime
 import fcntl
 import hashlib
 import json
+import multiprocessing
 import os
 import platform as pyplatform
 import shlex
@@ -598,7 +599,42 @@ class SampleStore:
         with self._locked() as data:
             data.setdefault("notes", {})[key] = value
 
+    def total(self):
+        """How many samples the store holds, over all jobs."""
+        return sum(len(job["samples"]) for job in self.read()["jobs"].values())
+
     def addRun(self, record):
         """Record what a run added (its provenance and counts) in the store's "runs"."""
         with self._locked() as data:
             data["runs"].append(record)
+
+    def recordRun(self, added, seconds, platform, threads, workers):
+        """addRun() for this run: date, commit, machine, platform, threads and workers, samples added,
+        wall seconds and the command."""
+        self.addRun(dict(date=f"{datetime.datetime.now().astimezone():%Y-%m-%d %H:%M %Z}", commit=commit(), machine=machine(),
+                         platform=platform, threads=threads, workers=workers, added=added, seconds=seconds, command=command()))
+
+    @staticmethod
+    def describeRun(run):
+        """One line of a run record (records of earlier runs may lack fields)."""
+        where = run.get("platform", "")
+        if run.get("threads"):
+            where += f", {run['threads']} thread(s)"
+        if run.get("workers", 1) > 1:
+            where += f" x {run['workers']} workers"
+        minutes = f" in {run['seconds']/60:.0f} min" if run.get("seconds") else ""
+        return f"{run['date']}, commit {run['commit']}, {where.strip(', ')}: {run['added']} added{minutes}, `{run['command']}`"
+
+
+def runWorkers(task, arguments, workers):
+    """task(*arguments) in this process (workers 1), or in `workers` processes at once, each started
+    afresh (spawned: its own OpenMM, none of this process's threads)."""
+    if workers == 1:
+        task(*arguments)
+        return
+    spawn = multiprocessing.get_context("spawn")
+    processes = [spawn.Process(target=task, args=arguments) for _ in range(workers)]
+    for process in processes:
+        process.start()
+    for process in processes:
+        process.join()

@@ -64,7 +64,6 @@ and a log; a full run writes docs/results/inertia_sampling.md and docs/figures/i
 
 import argparse
 import json
-import multiprocessing
 import shutil
 import sys
 import time
@@ -74,7 +73,7 @@ import openmm
 from openmm import app, unit
 
 import openmmrigid
-from benchmarking import (ROOT, RESULTS as BENCHMARK_RESULTS, Progress, ResultsDocument, SampleStore, blockMean, checkDuty, episodeTwin, header,
+from benchmarking import (ROOT, RESULTS as BENCHMARK_RESULTS, Progress, ResultsDocument, SampleStore, blockMean, runWorkers, checkDuty, episodeTwin, header,
                           EPISODE, nsPerDay, openLog, productionSeconds, pyplot, say, stamp, timeInterleaved,
                           TimingFailure)
 from nvt_accuracy import (AMU_PER_NM3_IN_G_PER_ML, BOLTZMANN, FRICTION, SYSTEMS as NVT_SYSTEMS, TEMPERATURE, buildModel,
@@ -510,7 +509,7 @@ def runSystem(name, args, platform, properties):
     known = store.read().get("notes", {}).get("configs", {})
     store.note("configs", dict(known, **{label: list(config) for label, config in configs.items()}))
     data = store.read()
-    before = sum(len(job["samples"]) for job in data["jobs"].values())
+    before = store.total()
     blockers = blockersIn(configs)
     needed = sorted({start for key in jobKeys(configs)
                      if data["jobs"].get(key, {}).get("failed") is None and not SampleStore.blocked(data, key, blockers(key))
@@ -518,21 +517,9 @@ def runSystem(name, args, platform, properties):
     chainProperties = {"Threads": str(args.threads*args.workers)} if args.platform == "CPU" and args.threads else properties
     ensureStarts(name, store, needed, args, platform, chainProperties)
     deadline = time.time() + (args.hours*3600 if args.hours else float("inf"))
-    workerArgs = (name, store.folder, configs, args.starts, deadline, args)
-    if args.workers == 1:
-        worker(*workerArgs)
-    else:
-        spawn = multiprocessing.get_context("spawn")
-        processes = [spawn.Process(target=worker, args=workerArgs) for _ in range(args.workers)]
-        for process in processes:
-            process.start()
-        for process in processes:
-            process.join()
-    added = sum(len(job["samples"]) for job in store.read()["jobs"].values()) - before
-    fields = dict(line.split(": ", 1) for line in header(platform.getName(), args.threads or None))
-    store.addRun(dict(date=fields["date"], commit=fields["commit"], machine=fields["machine"], platform=fields["platform"]
-                      + (f", {args.workers} workers" if args.workers > 1 else ""), added=added,
-                      seconds=time.perf_counter() - started, command=fields["command"].strip("`")))
+    runWorkers(worker, (name, store.folder, configs, args.starts, deadline, args), args.workers)
+    added = store.total() - before
+    store.recordRun(added, time.perf_counter() - started, platform.getName(), args.threads or None, args.workers)
     result = resultOf(name, store, args.tolerance)
     stamp(f"{name}: {added} runs added; starts " + ", ".join(f"{label} {count}" for label, count in result["starts"].items())
           + "; accurate steps "
@@ -746,9 +733,8 @@ def report(results, quick):
         document.section(result["title"])
         history = result.get("history", [])
         if history:
-            document.text(f"Runs that made these samples ({result['store']}): "
-                          + "; ".join(f"{run['date']}, commit {run['commit']}, {run['platform']}, {run['added']} runs added "
-                                      f"in {run['seconds']/60:.0f} min, `{run['command']}`" for run in history) + ".")
+            document.text(f"Runs that made these samples ({result['store']}; runs added): "
+                          + "; ".join(SampleStore.describeRun(run) for run in history) + ".")
         if "potential" not in result["reference"]:
             document.text("No run at 2 fs has finished yet: no reference, nothing to compare.")
             continue

@@ -57,7 +57,6 @@ openmmtools' VRORV (BAOAB) measures. Without that correction (as in the first re
 
 import argparse
 import datetime
-import multiprocessing
 import shutil
 import time
 import warnings
@@ -443,10 +442,8 @@ def report(folder, systems, kinds, steps, quick, document):
     if runs:
         document.section("Runs that made these samples",
                          "Each run adds frames to the store (`" + str(folder.relative_to(benchmarking.ROOT)) + "`); "
-                         "frames from different runs are independent samples and pool.")
-        document.table(["date", "commit", "machine", "workers x threads", "frames added", "command"],
-                       [[run["date"], run["commit"], run["machine"], f"{run['workers']} x {run['threads']}", run["added"],
-                         f"`{run['command']}`"] for run in runs])
+                         "frames from different runs are independent samples and pool. Frame pairs added:")
+        document.text("\n".join(f"- {benchmarking.SampleStore.describeRun(run)} ({run['machine']})" for run in runs))
     if csvRows:
         benchmarking.writeCsv(benchmarking.RESULTS/"sampling_error"/("quick" if quick else "full")/"sampling_error.csv", csvRows)
 
@@ -500,7 +497,8 @@ def main():
     setup = dict(molecules=molecules, protocol=protocol, spacing=args.spacing, equilibrate=args.equilibrate, floor=args.floor,
                  platform=args.platform, friction=FRICTION, temperature=TEMPERATURE)
     store = benchmarking.SampleStore(folder, setup)
-    before = sum(len(job["samples"]) for job in store.read()["jobs"].values())
+    before = store.total()
+    started = time.time()
     keys = [jobKey(systemName, kind, stepFs) for systemName in systems for kind in kinds for stepFs in steps]
     if not args.report:
         # Frames for the whole target first (one chain per system, all the workers' threads).
@@ -508,20 +506,10 @@ def main():
         for systemName in systems:
             ensureFrames(folder, systemName, molecules, samples, args.spacing, args.equilibrate, platform, chainProperties)
         deadline = time.time() + (args.hours*3600 if args.hours else float("inf"))
-        workerArgs = (folder, keys, steps, samples, args.chunk, deadline, args.platform, args.threads, protocol)
-        if args.workers == 1:
-            worker(*workerArgs)
-        else:
-            spawn = multiprocessing.get_context("spawn")
-            processes = [spawn.Process(target=worker, args=workerArgs) for _ in range(args.workers)]
-            for process in processes:
-                process.start()
-            for process in processes:
-                process.join()
-        added = sum(len(job["samples"]) for job in store.read()["jobs"].values()) - before
-        store.addRun(dict(date=f"{datetime.datetime.now().astimezone():%Y-%m-%d %H:%M %Z}", commit=benchmarking.commit(),
-                          machine=benchmarking.machine(), workers=args.workers, threads=args.threads, added=added,
-                          command=benchmarking.command()))
+        benchmarking.runWorkers(worker, (folder, keys, steps, samples, args.chunk, deadline, args.platform, args.threads, protocol),
+                                args.workers)
+        added = store.total() - before
+        store.recordRun(added, time.time() - started, args.platform, args.threads, args.workers)
         stamp(f"{added} frame(s) added")
         if not args.no_timing:
             for systemName in systems:
