@@ -153,3 +153,36 @@ def test_shell_pair_density():
     values = [inertia.shellPairDensity(rng.uniform(0, 2.5, (500, 3)), np.full(3, 2.5)) for _ in range(20)]
     # An ideal gas of 500 in (2.5 nm)^3 has about 236 pairs in the shell: 20 frames give 1 +- 0.015.
     assert abs(np.mean(values) - 1) < 0.06
+
+
+def test_inertia_sampling_result_from_its_store(tmp_path):
+    """What inertia_sampling reports from a store: each configuration with the starts all its running
+    steps have, a failed step with its runs and its failure (the steps it blocks "not run"), and the
+    accurate-step analysis over those."""
+    inertia = pytest.importorskip("inertia_sampling")
+    store = benchmarking.SampleStore(tmp_path/"tip3p-nvt", {})
+    store.note("waters", 500)
+    store.note("configs", {"stock": ["stock", False, False, 0.0, [2, 4, 6, 8]],
+                           "raised-0.04": ["raised", True, False, 0.04, [4, 8, 12]]})
+    run = lambda u: dict(potential=[u, 0.02], temperature=[300.0, 0.5], gShell=[2.4, 0.01], D=4.0, tauRot=3.0, tauU=0.5)
+    for start in range(3):
+        store.add("stock|2", start, run(-40.0))
+    for start in range(2):
+        store.add("stock|4", start, run(-40.01))
+        store.add("raised-0.04|4", start, run(-40.0))
+        store.add("raised-0.04|8", start, run(-39.98))
+    store.add("stock|6", 0, run(-39.9))
+    store.fail("stock|6", 1, "NaN")
+    store.add("raised-0.04|12", 0, run(-39.95))
+    result = inertia.resultOf("tip3p-nvt", store, 0.1)
+    assert result["starts"] == {"stock": 2, "raised-0.04": 1}
+    runs = {(r["config"], r["step"], r["start"]): r["failure"] for r in result["runs"]}
+    assert [key for key in runs if key[:2] == ("stock", 2)] == [("stock", 2, 0), ("stock", 2, 1)]
+    assert runs[("stock", 6, 0)] == "" and runs[("stock", 6, 1)] == "NaN"
+    assert runs[("stock", 8, 0)].startswith("not run") and runs[("stock", 8, 1)].startswith("not run")
+    assert sorted(key for key in runs if key[0] == "raised-0.04") == [("raised-0.04", 4, 0), ("raised-0.04", 8, 0),
+                                                                      ("raised-0.04", 12, 0)]
+    summary = result["summary"]
+    assert [p["step"] for p in summary["stock"]["points"]] == [2, 4] and summary["stock"]["largestStable"] == 4
+    assert result["reference"]["potential"][0] == pytest.approx(-40.0)
+    assert summary["raised-0.04"]["points"][-1]["potential"][2] == pytest.approx(0.05)
