@@ -516,7 +516,7 @@ def runSystem(name, args, platform, properties):
                      for start in range(args.starts) if str(start) not in data["jobs"].get(key, {}).get("samples", {})})
     chainProperties = {"Threads": str(args.threads*args.workers)} if args.platform == "CPU" and args.threads else properties
     ensureStarts(name, store, needed, args, platform, chainProperties)
-    deadline = time.time() + (args.hours*3600 if args.hours else float("inf"))
+    deadline = time.time() + (args.hours*3600 if args.hours is not None else float("inf"))
     runWorkers(worker, (name, store.folder, configs, args.starts, deadline, args), args.workers)
     added = store.total() - before
     store.recordRun(added, time.perf_counter() - started, platform.getName(), args.threads or None, args.workers)

@@ -468,7 +468,7 @@ def main():
     parser.add_argument("--hours", type=float, default=None, help="stop adding frames after this long (the report is still written)")
     parser.add_argument("--no-timing", action="store_true", help="leave ns/day for a later run on a quiet machine")
     parser.add_argument("--retime", action="store_true", help="time every step again")
-    parser.add_argument("--report", action="store_true", help="only write the report from the stored frames")
+    parser.add_argument("--report", action="store_true", help="add no frames: write the report from the stored ones (with --retime: time first)")
     parser.add_argument("--timing-repetitions", type=int, default=5)
     args = parser.parse_args()
     quick = args.quick
@@ -505,15 +505,16 @@ def main():
         chainProperties = benchmarking.cpuProperties(platform, args.threads*args.workers)
         for systemName in systems:
             ensureFrames(folder, systemName, molecules, samples, args.spacing, args.equilibrate, platform, chainProperties)
-        deadline = time.time() + (args.hours*3600 if args.hours else float("inf"))
+        deadline = time.time() + (args.hours*3600 if args.hours is not None else float("inf"))
         benchmarking.runWorkers(worker, (folder, keys, steps, samples, args.chunk, deadline, args.platform, args.threads, protocol),
                                 args.workers)
         added = store.total() - before
         store.recordRun(added, time.time() - started, args.platform, args.threads, args.workers)
         stamp(f"{added} frame(s) added")
-        if not args.no_timing:
-            for systemName in systems:
-                timeSteps(folder, systemName, kinds, steps, platform, properties, args.timing_repetitions, args.retime)
+    # Timed after adding frames (unless --no-timing), or with --report only when --retime asks.
+    if not args.no_timing and (not args.report or args.retime):
+        for systemName in systems:
+            timeSteps(folder, systemName, kinds, steps, platform, properties, args.timing_repetitions, args.retime)
     document = benchmarking.ResultsDocument("sampling_error", "Configuration-space sampling error against step size",
                                             quick=quick, platform=args.platform, threads=args.threads,
                                             about="Method: the docstring of `benchmarks/sampling_error.py`.")
