@@ -56,7 +56,7 @@ is the equilibrated system, start k start k - 1 continued 5 ps by stock at 2 fs.
 reported with the starts all its steps have. A system is timed when it has no timing yet, or with
 `--retime` (the timing is kept in its store); `--no-timing` leaves it for a quiet machine. The runs
 of 2026-12-02 and 2026-12-03 made before the stores (their starts 3 ps from one equilibrated state)
-were put into the stores with `--import-results`.
+were put into the stores once, unchanged (commit 39f4938's `--import-results`, removed since).
 
 Results: the stores; benchmarks/results/inertia_sampling/<mode>/<system>.json (each system's analysis)
 and a log; a full run writes docs/results/inertia_sampling.md and docs/figures/inertia_sampling_<system>.png.
@@ -73,7 +73,7 @@ import openmm
 from openmm import app, unit
 
 import openmmrigid
-from benchmarking import (ROOT, RESULTS as BENCHMARK_RESULTS, Progress, ResultsDocument, SampleStore, blockMean, runWorkers, checkDuty, episodeTwin, header,
+from benchmarking import (ROOT, RESULTS as BENCHMARK_RESULTS, Progress, ResultsDocument, SampleStore, blockMean, cpuProperties, runWorkers, checkDuty, episodeTwin, header,
                           EPISODE, nsPerDay, openLog, productionSeconds, pyplot, say, stamp, timeInterleaved,
                           TimingFailure)
 from nvt_accuracy import (AMU_PER_NM3_IN_G_PER_ML, BOLTZMANN, FRICTION, SYSTEMS as NVT_SYSTEMS, TEMPERATURE, buildModel,
@@ -390,7 +390,7 @@ def worker(name, folder, configs, target, deadline, args):
     `target` starts or the deadline passes."""
     store = SampleStore(folder)
     platform = openmm.Platform.getPlatformByName(args.platform)
-    properties = {"Threads": str(args.threads)} if args.platform == "CPU" and args.threads else {}
+    properties = cpuProperties(platform, args.threads)
     spec, topology, system, _, _ = build(name)
     rigidSolute = spec.get("rigidSolute", False)
     models = Models(system, topology, rigidSolute)
@@ -466,39 +466,6 @@ def resultOf(name, store, tolerance):
     return result
 
 
-def importResults(name, store, path):
-    """Put the runs of a result saved before the stores (benchmarks/results/inertia_sampling/full/<name>.json)
-    into the store, with its timing and provenance; a store that has samples already is left alone."""
-    data = store.read()
-    if data["jobs"]:
-        say(f"{name}: the store has samples already; {path} not imported")
-        return
-    result = json.loads(path.read_text())
-    command = next((line for line in result.get("provenance", []) if line.startswith("command:")), "")
-    if any(option in command for option in ("--time", "--discard", "--equilibrate", "--quick")):
-        raise ValueError(f"{path} was made with other run lengths than the store's ({command})")
-    added = 0
-    for run in result["runs"]:
-        key = jobKey(run["config"], run["step"])
-        if run["failure"].startswith("not run"):
-            continue
-        if run["failure"]:
-            store.fail(key, run["start"], run["failure"])
-        else:
-            store.add(key, run["start"], {k: v for k, v in run.items() if k not in ("config", "step", "start", "failure")})
-            added += 1
-    store.note("configs", result["configs"])
-    store.note("waters", result["waters"])
-    for field in ("timed", "timingFailures", "retimed"):
-        if field in result:
-            store.note(field, result[field])
-    fields = dict(line.split(": ", 1) for line in result.get("provenance", []) if ": " in line)
-    store.addRun(dict(date=fields.get("date", ""), commit=fields.get("commit", ""), machine=fields.get("machine", ""),
-                      platform=fields.get("platform", ""), added=added, seconds=result.get("seconds", 0.0),
-                      command=fields.get("command", "").strip("`")))
-    say(f"{name}: imported {added} runs from {path}")
-
-
 def runSystem(name, args, platform, properties):
     """Add starts to the system's store until every job has --starts (or --hours pass), then analyse
     and, where it is not timed yet (or with --retime), time it."""
@@ -514,7 +481,7 @@ def runSystem(name, args, platform, properties):
     needed = sorted({start for key in jobKeys(configs)
                      if data["jobs"].get(key, {}).get("failed") is None and not SampleStore.blocked(data, key, blockers(key))
                      for start in range(args.starts) if str(start) not in data["jobs"].get(key, {}).get("samples", {})})
-    chainProperties = {"Threads": str(args.threads*args.workers)} if args.platform == "CPU" and args.threads else properties
+    chainProperties = cpuProperties(platform, args.threads*args.workers)
     ensureStarts(name, store, needed, args, platform, chainProperties)
     deadline = time.time() + (args.hours*3600 if args.hours is not None else float("inf"))
     runWorkers(worker, (name, store.folder, configs, args.starts, deadline, args), args.workers)
@@ -725,11 +692,7 @@ def perWallHour(entry):
 def report(results, quick):
     document = ResultsDocument("inertia_sampling", "Sampling speed with raised moments of inertia", quick=quick,
                                about=__doc__.split("\n\n")[0].replace("\n", " "))
-    for result in results:
-        if "timed" not in result:  # saved before the timed costs were kept apart from the analysis
-            result["timed"] = {label: dict(step=entry["timedStep"], msPerStep=entry["msPerStep"])
-                               for label, entry in result["summary"].items() if "timedStep" in entry}
-        analyse(result)
+    for result in results:  # each analysed by resultOf()
         document.section(result["title"])
         history = result.get("history", [])
         if history:
@@ -862,9 +825,6 @@ def main():
     parser.add_argument("--report", action="store_true", help="only write the report from the stores")
     parser.add_argument("--retime", action="store_true",
                         help="time the systems of --systems again (their sampling kept), then write the report")
-    parser.add_argument("--import-results", action="store_true",
-                        help="put the results of --systems saved before the stores (benchmarks/results/inertia_sampling/full) "
-                             "into their empty stores")
     args = parser.parse_args()
     if args.quick:
         args.starts, args.time, args.discard, args.equilibrate = 1, 2.0, 0.5, 2.0
@@ -875,14 +835,12 @@ def main():
     if not args.report:
         openLog(folder/("retime.txt" if args.retime else "log.txt"))
         platform = openmm.Platform.getPlatformByName(args.platform)
-        properties = {"Threads": str(args.threads)} if args.platform == "CPU" and args.threads else {}
+        properties = cpuProperties(platform, args.threads)
         for name in args.systems:
             if args.quick and (stores/name).exists():
                 shutil.rmtree(stores/name)
             store = storeOf(name, args)
-            if args.import_results:
-                importResults(name, store, RESULTS/"full"/f"{name}.json")
-            elif args.retime:
+            if args.retime:
                 timeSystem(name, store, resultOf(name, store, args.tolerance), args, platform, properties)
             else:
                 runSystem(name, args, platform, properties)

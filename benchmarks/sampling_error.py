@@ -305,21 +305,21 @@ def jobKey(systemName, kind, stepFs):
     return f"{systemName}|{kind}|{stepFs:g}"
 
 
-def blockers(key):
-    """A step does not run once a smaller step of the same integrator on the same system failed."""
-    systemName, kind, stepFs = key.split("|")
-    return [jobKey(systemName, kind, smaller) for smaller in STEPS[0] if smaller < float(stepFs)]
-
-
-STEPS = [[]]  # the run's steps (fs), set in main(): blockers() needs them in worker processes too
+def blockersAmong(steps):
+    """A step does not run once a smaller one of these steps (fs) failed, for the same integrator on the
+    same system: the jobs that block a job."""
+    def blockers(key):
+        systemName, kind, stepFs = key.split("|")
+        return [jobKey(systemName, kind, smaller) for smaller in steps if smaller < float(stepFs)]
+    return blockers
 
 
 def worker(folder, keys, steps, target, chunk, deadline, platformName, threads, protocol):
     """Claim jobs and add their samples until every job has `target` or the deadline passes: for each
     frame i, the shadow works (kT) of the protocol from the frame and from the state it reached with
     velocities drawn again (seeds 100 + 2i and 101 + 2i)."""
-    STEPS[0] = steps
     store = benchmarking.SampleStore(folder)
+    blockers = blockersAmong(steps)
     platform = openmm.Platform.getPlatformByName(platformName)
     properties = benchmarking.cpuProperties(platform, threads)
     loaded = {}
@@ -387,6 +387,7 @@ def report(folder, systems, kinds, steps, quick, document):
     store = benchmarking.SampleStore(folder)
     data = store.read()
     setup = data["setup"]
+    blockers = blockersAmong(steps)
     rows, csvRows = [], []
     for systemName in systems:
         figureData = {}
@@ -474,7 +475,6 @@ def main():
     quick = args.quick
     systems = args.systems or (["water"] if quick else ["water", "peptide"])
     steps = sorted(args.steps or ([2.0, 6.0, 10.0] if quick else [1.0, 2.0, 4.0, 6.0, 8.0, 10.0]))
-    STEPS[0] = steps
     samples = args.samples or (3 if quick else 50)
     protocol = args.protocol or (0.2 if quick else 2.0)
     molecules = args.molecules or (216 if quick else 500)
