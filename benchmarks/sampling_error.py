@@ -164,6 +164,7 @@ class Runner:
         masses = np.array([system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles())])
         self.masses = np.where(masses > 0, masses, np.inf)  # a virtual site gets no velocity
         self.halfStepBehind = kind != "openmmtools-vrorv"
+        self.failure = None  # why the last work() returned None
 
     def kinetic(self):
         return self.context.getState(getEnergy=True).getKineticEnergy().value_in_unit(KJ)
@@ -241,10 +242,14 @@ class Runner:
             elif self.halfStepBehind:
                 halfBehind = self.kinetic()
                 ends += self.kick(halfStep) - halfBehind
-        except openmm.OpenMMException:
+        except openmm.OpenMMException as error:
+            self.failure = str(error).splitlines()[0][:160]
             return None
         work = (work + ends)/KT
-        return work if np.isfinite(work) else None
+        if not np.isfinite(work):
+            self.failure = "the shadow work is not finite"
+            return None
+        return work
 
 
 STORES = benchmarking.ROOT/"benchmarks"/"stores"/"sampling_error"
@@ -340,7 +345,7 @@ def worker(folder, keys, steps, target, chunk, deadline, platformName, threads, 
                 first = runner.work(positions[index].astype(float), boxes[index], count, velocitySeed=100 + 2*index)
                 second = runner.work(None, None, count, velocitySeed=101 + 2*index) if first is not None else None
                 if first is None or second is None:
-                    store.fail(key, index, "NaN or an exception")
+                    store.fail(key, index, runner.failure or "NaN or an exception")
                     stamp(f"{key}: failed at frame {index} (unstable); larger steps not run")
                     break
                 store.add(key, index, (first, second), fired=runner.fired)
@@ -398,7 +403,9 @@ def report(folder, systems, kinds, steps, quick, document):
                 if job is None:
                     continue
                 if job["failed"] is not None:
-                    rows.append([systemName, kind, f"{stepFs:g}", "", f"unstable (frame {job['failed']['sample']})", "", ""])
+                    failed = job["failed"]
+                    reason = "" if failed["reason"] == "NaN or an exception" else f": {failed['reason'][:100]}"
+                    rows.append([systemName, kind, f"{stepFs:g}", "", f"unstable (frame {failed['sample']}){reason}", "", ""])
                     continue
                 if benchmarking.SampleStore.blocked(data, key, blockers(key)):
                     continue
