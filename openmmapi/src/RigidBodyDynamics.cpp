@@ -3,6 +3,7 @@
 #include "numerics/RigidCore.h"
 #include "numerics/SymmetricEigen.h"
 #include "openmm/OpenMMException.h"
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <mutex>
@@ -88,21 +89,44 @@ void RigidBodyDynamics::forEachBody(const function<void(int)>& task) {
                 error = e.what();
         }
     };
-    if (threads == NULL || threads->getNumThreads() < 2 || numBodies < 64) {
-        for (int b = 0; b < numBodies; b++)
+    forEachRange(numBodies, 64, [&](int, int begin, int end) {
+        for (int b = begin; b < end; b++)
             guarded(b);
-    }
-    else {
-        const int numThreads = threads->getNumThreads();
-        threads->execute([&](int thread) {
-            int begin = (numBodies*(long long) thread)/numThreads;
-            int end = (numBodies*(long long) (thread + 1))/numThreads;
-            for (int b = begin; b < end; b++)
-                guarded(b);
-        });
-    }
+    });
     if (!error.empty())
         throw OpenMMException(error);
+}
+
+void RigidBodyDynamics::forEachRange(int count, int minimum, const function<void(int thread, int begin, int end)>& task) const {
+    if (threads == NULL || threads->getNumThreads() < 2 || count < minimum) {
+        task(0, 0, count);
+        return;
+    }
+    const int numThreads = threads->getNumThreads();
+    threads->execute([&](int thread) {
+        task(thread, (count*(long long) thread)/numThreads, (count*(long long) (thread + 1))/numThreads);
+    });
+}
+
+// Below this many particles a copy or a comparison is not worth waking the threads for.
+static const int ParallelArrayMinimum = 4096;
+
+void RigidBodyDynamics::copyParticleArray(const vector<Vec3>& from, vector<Vec3>& to) const {
+    to.resize(from.size());
+    forEachRange(from.size(), ParallelArrayMinimum, [&](int, int begin, int end) {
+        std::copy(from.begin() + begin, from.begin() + end, to.begin() + begin);
+    });
+}
+
+bool RigidBodyDynamics::particleArraysEqual(const vector<Vec3>& a, const vector<Vec3>& b) const {
+    if (a.size() != b.size())
+        return false;
+    const int maxThreads = (threads == NULL ? 1 : max(1, threads->getNumThreads()));
+    vector<char> equal(maxThreads, 1);
+    forEachRange(a.size(), ParallelArrayMinimum, [&](int thread, int begin, int end) {
+        equal[thread] = std::equal(a.begin() + begin, a.begin() + end, b.begin() + begin);
+    });
+    return std::find(equal.begin(), equal.end(), 0) == equal.end();
 }
 
 void RigidBodyDynamics::setGeometry(const StepGeometry& newGeometry) {
@@ -232,6 +256,12 @@ void RigidBodyDynamics::refreshMomenta(int b, const vector<Vec3>& positions, con
     }
     state.velocity = toVector(velocity);
     state.angularMomentum = bodyAngularMomentum(system, b, state.attitude, toVector(angularMomentum));
+    recordWrittenVelocities(b, velocities);
+}
+
+void RigidBodyDynamics::recordWrittenVelocities(int b, const vector<Vec3>& velocities) {
+    const int n = system.getBodySize(b);
+    const int* members = system.getBodyParticles(b);
     for (int i = 0; i < n; i++)
         writtenVelocities[members[i]] = velocities[members[i]];
 }
@@ -426,6 +456,7 @@ void RigidBodyDynamics::rescaleMomenta(vector<Vec3>& velocities, double targetKi
 void RigidBodyDynamics::closingKick(vector<Vec3>& positions, vector<Vec3>& velocities, const vector<Vec3>& forces,
                                     double kick, double constraintTolerance) {
     requireConstraints();
+    writtenVelocities.resize(velocities.size());
     forEachBody([&](int b) {
         BodyState& state = states[b];
         Vec3 force, torque;
@@ -439,13 +470,13 @@ void RigidBodyDynamics::closingKick(vector<Vec3>& positions, vector<Vec3>& veloc
             state.angularMomentum[k] += kick*torque[k];
         }
         writeRigidVelocities(b, positions, velocities);
+        recordWrittenVelocities(b, velocities);
     });
     if (kick != 0.0)
         for (int p : system.getFreeParticles())
             velocities[p] += forces[p]*(kick*inverseMasses[p]);
     if (constraints)
         constraints->applyToVelocities(positions, velocities, inverseMasses, constraintTolerance);
-    writtenVelocities = velocities;
 }
 
 void RigidBodyDynamics::writeRigidVelocities(int b, const vector<Vec3>& positions, vector<Vec3>& velocities) {
@@ -460,12 +491,10 @@ void RigidBodyDynamics::writeRigidVelocities(int b, const vector<Vec3>& position
 }
 
 void RigidBodyDynamics::writeBodyVelocities(const vector<Vec3>& positions, vector<Vec3>& velocities) {
+    writtenVelocities.resize(velocities.size());
     forEachBody([&](int b) {
         writeRigidVelocities(b, positions, velocities);
-        const int n = system.getBodySize(b);
-        const int* members = system.getBodyParticles(b);
-        for (int i = 0; i < n; i++)
-            writtenVelocities[members[i]] = velocities[members[i]];
+        recordWrittenVelocities(b, velocities);
     });
 }
 

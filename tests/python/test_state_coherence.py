@@ -618,3 +618,57 @@ def test_constraint_within_an_explicit_body(water, ratio, applied, platformName)
     positions = positions_of(context)
     distance = np.linalg.norm(positions[oxygen] - positions[hydrogen])
     assert abs(distance - (ratio * given if applied else given)) < 1e-9
+
+
+@pytest.mark.parametrize("platformName", ["Reference", "CPU"])
+def test_one_particle_moved_without_notice_in_a_large_system(platformName):
+    """Over 4096 particles, where the CPU platform's threads compare the positions with the ones the
+    integrator wrote in one range each (RigidBodyDynamics::particleArraysEqual): a CustomIntegrator in
+    a CompoundIntegrator moves only the last particle, which sends no notice. The rigid integrator's
+    next step must fit the bodies to the moved positions, as a fresh Context set to that State does
+    (a comparison that missed the last range would undo the move). No forces: the step is the
+    integrator's alone."""
+    waters = 1400  # 4200 particles
+    system = openmm.System()
+    lattice = np.array([(i, j, k) for i in range(12) for j in range(12) for k in range(10)])[:waters] * 0.31
+    geometry = np.array([[0.0, 0.0, 0.0], [0.09572, 0.0, 0.0], [-0.0239988, 0.0926627, 0.0]])
+    rng = np.random.default_rng(5)
+    positions = []
+    for site in lattice:
+        a, _ = np.linalg.qr(rng.standard_normal((3, 3)))
+        first = system.getNumParticles()
+        for mass, offset in zip((15.999, 1.008, 1.008), geometry):
+            system.addParticle(mass)
+            positions.append(site + a @ offset)
+        system.addConstraint(first, first + 1, 0.09572)
+        system.addConstraint(first, first + 2, 0.09572)
+        system.addConstraint(first + 1, first + 2, 0.15139)
+    positions = np.array(positions)
+    mover = openmm.CustomIntegrator(STEP)
+    mover.addPerDofVariable("moved", 0.0)
+    mover.addComputePerDof("x", "x + 0.01*moved")
+    compound = openmm.CompoundIntegrator()
+    compound.addIntegrator(rigid_integrator())
+    compound.addIntegrator(mover)
+    platform, properties = systems.platform_and_properties(platformName)
+    if platformName == "CPU":
+        properties["Threads"] = "2"
+    context = openmm.Context(system, compound, platform, properties)
+    context.setPositions(positions)
+    context.setVelocitiesToTemperature(300, 3)
+    compound.step(2)
+    moved = np.zeros((system.getNumParticles(), 3))
+    moved[-1] = 1.0
+    mover.setPerDofVariableByName("moved", [openmm.Vec3(*row) for row in moved])
+    compound.setCurrentIntegrator(1)
+    compound.step(1)
+    afterMove = full_state(context)
+    assert max_difference(positions_of(context)[-1], afterMove.getPositions(asNumpy=True)[-1].value_in_unit(unit.nanometer)) == 0
+    compound.setCurrentIntegrator(0)
+    compound.step(1)
+    answerIntegrator = rigid_integrator()
+    answer = openmm.Context(system, answerIntegrator, platform, properties)
+    answer.setState(afterMove)
+    answerIntegrator.step(1)
+    difference = max_difference(positions_of(context), positions_of(answer))
+    assert difference < tolerance(platformName, 1e-12, 1e-9), f"positions differ by {difference:.3g} nm from a fresh Context's"

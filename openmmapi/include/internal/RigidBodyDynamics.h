@@ -212,6 +212,14 @@ public:
                                        const StepGeometry& geometry);
     /** The text of the error for a body whose velocity, force or torque is not finite. */
     static std::string notFiniteMessage(const std::string& className, int body);
+    /**
+     * to = from for an array of all the particles, copied in ranges on the threads: the per-step
+     * copies a host kernel keeps (the positions it wrote, the velocities a step starts from), so that
+     * they do not run on one thread while the rest of the step runs on all.
+     */
+    void copyParticleArray(const std::vector<OpenMM::Vec3>& from, std::vector<OpenMM::Vec3>& to) const;
+    /** Whether two particle arrays are equal element by element (a NaN equals nothing), compared in ranges on the threads. */
+    bool particleArraysEqual(const std::vector<OpenMM::Vec3>& a, const std::vector<OpenMM::Vec3>& b) const;
 private:
     struct BodyState {
         Vector3 center, velocity, angularMomentum;  // angular momentum in the lab frame
@@ -221,6 +229,13 @@ private:
     void requireConstraints() const;
     /** Run task(b) for every body, on the threads if there are any; the first exception is rethrown here. */
     void forEachBody(const std::function<void(int)>& task);
+    /**
+     * Split 0 ... count - 1 into one contiguous range per thread and run task(thread, begin, end) on
+     * each; serially, as one range, without threads or below `minimum` items.
+     */
+    void forEachRange(int count, int minimum, const std::function<void(int thread, int begin, int end)>& task) const;
+    /** Record body b's particle velocities as those this class wrote or read (writtenVelocities; only body particles' are read). */
+    void recordWrittenVelocities(int b, const std::vector<OpenMM::Vec3>& velocities);
     /** Take body b's momenta from its particles if their velocities are not the ones this class wrote. */
     void refreshMomenta(int b, const std::vector<OpenMM::Vec3>& positions, const std::vector<OpenMM::Vec3>& velocities);
     /** The total force and the torque about the centre on body b. */
@@ -245,7 +260,7 @@ private:
     std::vector<BodyState> states;
     std::vector<double> inverseMasses;
     std::vector<OpenMM::Vec3> previousPositions;
-    /** The body particles' velocities as this class last wrote or read them, consistent with the states. */
+    /** The body particles' velocities as this class last wrote or read them, consistent with the states (the entries of other particles are not kept). */
     std::vector<OpenMM::Vec3> writtenVelocities;
     /**
      * Scratch for the fits, so that a projection (every barostat move) allocates nothing: one body's

@@ -86,7 +86,7 @@ void ReferenceIntegrateRigidBodyStepKernel::setGeometry(ContextImpl& context, co
 void ReferenceIntegrateRigidBodyStepKernel::beginStep(ContextImpl& context, const StepGeometry& geometry) {
     dynamics->setGeometry(geometry);
     // The step sequence proved the positions current (positionsAreCurrent()): writtenPositions holds them.
-    startVelocities = extractVelocities(context);
+    dynamics->copyParticleArray(extractVelocities(context), startVelocities);
 }
 
 void ReferenceIntegrateRigidBodyStepKernel::abandonStep(ContextImpl& context) {
@@ -98,7 +98,7 @@ void ReferenceIntegrateRigidBodyStepKernel::abandonStep(ContextImpl& context) {
 void ReferenceIntegrateRigidBodyStepKernel::project(ContextImpl& context) {
     dynamics->project(extractPositions(context), extractVelocities(context));
     context.computeVirtualSites();
-    writtenPositions = extractPositions(context);
+    dynamics->copyParticleArray(extractPositions(context), writtenPositions);
 }
 
 void ReferenceIntegrateRigidBodyStepKernel::projectVelocities(ContextImpl& context) {
@@ -106,7 +106,7 @@ void ReferenceIntegrateRigidBodyStepKernel::projectVelocities(ContextImpl& conte
 }
 
 bool ReferenceIntegrateRigidBodyStepKernel::positionsAreCurrent(ContextImpl& context) const {
-    return extractPositions(context) == writtenPositions;
+    return dynamics->particleArraysEqual(extractPositions(context), writtenPositions);
 }
 
 void ReferenceIntegrateRigidBodyStepKernel::kickAndDrift(ContextImpl& context, double kick, double drift,
@@ -163,7 +163,7 @@ void ReferenceIntegrateRigidBodyStepKernel::finishStep(ContextImpl& context, dou
     ReferencePlatform::PlatformData& data = platformData(context);
     data.time += dt;
     data.stepCount++;
-    writtenPositions = *data.positions;
+    dynamics->copyParticleArray(*data.positions, writtenPositions);
 }
 
 } // namespace OpenMMRigid
