@@ -253,6 +253,8 @@ class Runner:
 
 
 STORES = benchmarking.ROOT/"benchmarks"/"stores"/"sampling_error"
+# The failure reason of a job that failed without a message (and of every failure recorded before messages were kept).
+UNKNOWN_FAILURE = "NaN or an exception"
 
 
 def frameFiles(folder, name):
@@ -345,7 +347,7 @@ def worker(folder, keys, steps, target, chunk, deadline, platformName, threads, 
                 first = runner.work(positions[index].astype(float), boxes[index], count, velocitySeed=100 + 2*index)
                 second = runner.work(None, None, count, velocitySeed=101 + 2*index) if first is not None else None
                 if first is None or second is None:
-                    store.fail(key, index, runner.failure or "NaN or an exception")
+                    store.fail(key, index, runner.failure or UNKNOWN_FAILURE)
                     stamp(f"{key}: failed at frame {index} (unstable); larger steps not run")
                     break
                 store.add(key, index, (first, second), fired=runner.fired)
@@ -404,7 +406,7 @@ def report(folder, systems, kinds, steps, quick, document):
                     continue
                 if job["failed"] is not None:
                     failed = job["failed"]
-                    reason = "" if failed["reason"] == "NaN or an exception" else f": {failed['reason'][:100]}"
+                    reason = "" if failed["reason"] == UNKNOWN_FAILURE else f": {failed['reason'][:100]}"
                     rows.append([systemName, kind, f"{stepFs:g}", "", f"unstable (frame {failed['sample']}){reason}", "", ""])
                     continue
                 if benchmarking.SampleStore.blocked(data, key, blockers(key)):
