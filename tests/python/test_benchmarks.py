@@ -155,6 +155,37 @@ def test_shell_pair_density():
     assert abs(np.mean(values) - 1) < 0.06
 
 
+def test_principal_kinetic_energies_of_rigid_motion():
+    """The split of kinetic energy that langevin_axes.py and step_cap.py read: for particles moving
+    rigidly, v = V + omega x r, the translational part is sum M V^2 / 2 and the rotational parts add up
+    to sum omega.I.omega / 2 (I built here from the particles, not by the helper's eigenvectors); each
+    axis's part is L_k^2 / (2 I_k) in the helper's ascending order of moments."""
+    rng = np.random.default_rng(7)
+    masses = np.tile([16.0, 1.008, 1.008], 40)
+    shape = np.array([[0.0, 0.0, 0.0], [0.09572, 0.0, 0.0], [-0.024, 0.0927, 0.0]])
+    molecules = np.arange(120).reshape(40, 3)
+    positions, velocities, translational, rotational, axes = [], [], 0.0, 0.0, np.zeros(3)
+    for _ in range(40):
+        rotation, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+        x = rng.uniform(0, 3, 3) + shape@rotation.T
+        velocity, omega = rng.normal(size=3), rng.normal(scale=20, size=3)
+        m = masses[:3]
+        centre = (m[:, None]*x).sum(axis=0)/m.sum()
+        r = x - centre
+        positions.append(x)
+        velocities.append(velocity + np.cross(omega, r))
+        inertia = sum(mi*(ri@ri*np.eye(3) - np.outer(ri, ri)) for mi, ri in zip(m, r))
+        translational += 0.5*m.sum()*velocity@velocity
+        rotational += 0.5*omega@inertia@omega
+        moments, vectors = np.linalg.eigh(inertia)
+        axes += (vectors.T@(inertia@omega))**2/(2*moments)
+    kinetic, perAxis = benchmarking.principalKineticEnergies(np.concatenate(positions), np.concatenate(velocities),
+                                                             masses, molecules)
+    assert kinetic == pytest.approx(translational, rel=1e-12)
+    assert perAxis.sum() == pytest.approx(rotational, rel=1e-10)
+    assert perAxis == pytest.approx(axes, rel=1e-10)
+
+
 def test_inertia_sampling_result_from_its_store(tmp_path):
     """What inertia_sampling reports from a store: each configuration with the starts all its running
     steps have, a failed step with its runs and its failure (the steps it blocks "not run"), and the

@@ -16,6 +16,9 @@ counterpart of hydrogen mass repartitioning:
 - the configurational distribution does not change: dipoles in a uniform field sample <cos theta>
   = coth(x) - 1/x with and without raised moments, and a water box reads the bath temperature in
   translation and rotation with them;
+- every mass and the minimum moment times 4, at twice the step and half the friction, is the same
+  run bit for bit on Reference with velocities halved (the scaling benchmarks/step_cap.py reads its
+  doubled-mass runs by);
 - energy is conserved without a thermostat, and bad values are refused with the class named.
 """
 
@@ -428,3 +431,48 @@ def test_tip4pew_with_a_barostat_reads_the_bath_with_raised_moments():
     for i in range(system.getNumConstraints()):
         a, b, distance = system.getConstraintParameters(i)
         assert abs(np.linalg.norm(x[a] - x[b]) - distance.value_in_unit(unit.nanometer)) < 1e-9
+
+
+@pytest.mark.parametrize("langevin", [False, True], ids=["RigidBodyIntegrator", "RigidBodyLangevinIntegrator"])
+def test_four_times_the_masses_is_half_the_step(small_water_box, langevin):
+    """Neither mass nor inertia enters the configurational distribution, and uniformly heavier bodies
+    only move more slowly: with every mass and the minimum moment times 4, the step times 2 and the
+    friction halved, each kick, drift and Ornstein-Uhlenbeck factor is the same number, with velocities
+    halved, as in the run at the standard masses (factors of 2, so the scaling itself rounds nothing).
+    On Reference, from the same state and seed, the positions after 40 steps are the same bit for bit,
+    the velocities half, the kinetic energies equal. A moment, friction or noise taken with the wrong
+    inertia (the particles' rather than the raised one, or not scaled with the masses) breaks it.
+    Minimum 0.01 amu nm^2: TIP3P's smallest moment (0.0061) is raised, the water stays asymmetric."""
+    system, state = small_water_box
+    heavy = openmm.XmlSerializer.deserialize(openmm.XmlSerializer.serialize(system))
+    for i in range(heavy.getNumParticles()):
+        heavy.setParticleMass(i, 4 * system.getParticleMass(i))
+    positions = state.getPositions(asNumpy=True).value_in_unit(unit.nanometer)
+    velocities = state.getVelocities(asNumpy=True).value_in_unit(unit.nanometer / unit.picosecond)
+    runs = []
+    for model, scale in ((system, 1), (heavy, 4)):
+        root = np.sqrt(scale)
+        if langevin:
+            integrator = RigidBodyLangevinIntegrator(300, 4.0 / root, 0.002 * root)
+            integrator.setRandomNumberSeed(5)
+        else:
+            integrator = RigidBodyIntegrator(0.002 * root)
+        integrator.setMinimumMomentOfInertia(0.01 * scale)
+        context = systems.make_context(model, integrator, "Reference")
+        context.setPeriodicBoxVectors(*state.getPeriodicBoxVectors())
+        context.setPositions(positions)
+        context.setVelocities(velocities / root)
+        assert integrator.getBodyKind(0) == "asymmetric"
+        integrator.step(40)
+        final = context.getState(getPositions=True, getVelocities=True, getEnergy=True)
+        runs.append((final.getPositions(asNumpy=True).value_in_unit(unit.nanometer),
+                     final.getVelocities(asNumpy=True).value_in_unit(unit.nanometer / unit.picosecond) * root,
+                     final.getKineticEnergy().value_in_unit(unit.kilojoule_per_mole)))
+    (x1, v1, k1), (x4, v4, k4) = runs
+    moved = np.abs(x1 - positions).max()
+    print(f"moved up to {moved:.3g} nm; positions differ by {np.abs(x4 - x1).max():.3g} nm, "
+          f"velocities by {np.abs(v4 - v1).max():.3g} nm/ps, kinetic energies {k1:.6f} and {k4:.6f} kJ/mol")
+    assert moved > 0.01
+    np.testing.assert_array_equal(x4, x1)
+    np.testing.assert_array_equal(v4, v1)
+    assert k4 == k1
