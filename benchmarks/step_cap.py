@@ -24,10 +24,11 @@ that raised moments are counted with the inertia they have), U per water against
 reference in `inertia_sampling.py`'s store (its pooled 2 fs runs), and whether the accuracy check of
 the rigid integrator warned. A configuration stops at the first step that fails from some seed.
 
-    python benchmarks/step_cap.py                       # TIP4P-Ew and TIP3P, NVT: about 25 minutes on 2 cores
+    python benchmarks/step_cap.py                       # TIP4P-Ew and TIP3P, NVT: about 15 minutes (1 thread each of 2 busy cores)
     python benchmarks/step_cap.py --quick               # smoke run: TIP3P, two steps, 1 ps
 
-Writes docs/results/step_cap.md (a quick run: benchmarks/results/step_cap.md) and step_cap.csv.
+Writes docs/results/step_cap.md and docs/figures/step_cap_<system>.png (a quick run: both in benchmarks/results/)
+and benchmarks/results/step_cap.csv.
 """
 
 import argparse
@@ -43,8 +44,8 @@ from openmm import unit
 
 import openmmrigid
 import openmmrigid.testing
-from benchmarking import (RESULTS, ResultsDocument, blockMean, cpuProperties, openLog, principalKineticEnergies, say, stamp,
-                          writeCsv)
+from benchmarking import (RESULTS, ResultsDocument, blockMean, cpuProperties, openLog, principalKineticEnergies, pyplot,
+                          saveFigure, say, stamp, writeCsv)
 import inertia_sampling
 from nvt_accuracy import BOLTZMANN, FRICTION, TEMPERATURE
 
@@ -127,6 +128,36 @@ def reference(name):
     return store, inertia_sampling.resultOf(name, store, 0.1)["reference"]["potential"]
 
 
+def plot(rows, title, path):
+    """Bias of U per water (left) and the translational and rotational temperatures (right) of each
+    configuration against its step at standard masses (a failed step marked x); the PNG's path."""
+    plt = pyplot()
+    figure, (left, right) = plt.subplots(1, 2, figsize=(11, 4.2))
+    for index, label in enumerate(dict.fromkeys(row["configuration"] for row in rows)):
+        color = f"C{index}"
+        mine = [row for row in rows if row["configuration"] == label]
+        good = [row for row in mine if row["U_bias"] is not None]
+        h = [row["standard_mass_step_fs"] for row in good]
+        left.errorbar(h, [row["U_bias"] for row in good], yerr=[row["U_bias_error"] for row in good], color=color,
+                      marker="o", capsize=3, label=label)
+        right.plot(h, [row["T_translation"] for row in good], color=color, marker="o", label=f"{label}: translation")
+        right.plot(h, [row["T_rotation"] for row in good], color=color, marker="s", linestyle="--",
+                   label=f"{label}: rotation")
+        failed = [row["standard_mass_step_fs"] for row in mine if row["failed"]]
+        left.plot(failed, [0.0]*len(failed), color=color, marker="x", markersize=12, linestyle="none")
+    left.axhspan(-0.1, 0.1, color="0.9")
+    left.set_xlabel("step at standard masses (fs)")
+    left.set_ylabel("U/water - reference (kJ/mol); x: failed")
+    left.legend(fontsize=8)
+    right.axhline(TEMPERATURE.value_in_unit(unit.kelvin), color="0.5", linewidth=0.8)
+    right.set_xlabel("step at standard masses (fs)")
+    right.set_ylabel("kinetic temperature (K)")
+    right.legend(fontsize=6, ncol=2)
+    figure.suptitle(f"{title}, 500 waters, NVT: what caps the step")
+    saveFigure(figure, path)
+    return path
+
+
 def parseArguments():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--systems", nargs="+", choices=list(SYSTEMS), help="default: both; quick tip3p-nvt")
@@ -179,7 +210,8 @@ def main():
                 standardStep = stepFs/math.sqrt(config[3])
                 cells = [SYSTEMS[name], label, f"{stepFs:g}", f"{standardStep:.1f}"]
                 row = dict(system=name, configuration=label, step_fs=stepFs, standard_mass_step_fs=standardStep,
-                           runs=len(results), failed=len(failures), check_warned=warned)
+                           runs=len(results), failed=len(failures), check_warned=warned, T_reported=None,
+                           T_translation=None, T_rotation=None, U_bias=None, U_bias_error=None)
                 if good:
                     means = np.mean([g[0] for g in good], axis=0)
                     errors = np.sqrt(np.sum([g[1]**2 for g in good], axis=0))/len(good)
@@ -203,6 +235,9 @@ def main():
                          f"standard error.")
         document.table(["model", "configuration", "step (fs)", "standard-mass step (fs)", "T reported (K)", "T translation (K)", "T rotation (K)",
                         "U/water bias (kJ/mol)", "failed", "accuracy check warned"], table)
+        path = plot([row for row in rows if row["system"] == name], SYSTEMS[name],
+                    document.figurePath(f"step_cap_{name}.png"))
+        document.figure(path, f"{SYSTEMS[name]}: bias of U and temperatures against the step at standard masses")
     writeCsv(RESULTS/"step_cap.csv", rows)
     document.write()
     say(f"total {time.time() - started:.0f} s")
