@@ -236,6 +236,18 @@ class ResultsDocument:
         return self.path
 
 
+def openRun(name, title, args):
+    """The start of a benchmark's main(): its log in benchmarks/results/<name>.log, the platform
+    args.platform with args.threads CPU threads (None: the platform's default) and the ResultsDocument
+    <name> titled title (a quick run's in benchmarks/results/), whose method is the script's docstring.
+    Returns (platform, Context properties, document)."""
+    openLog(RESULTS/f"{name}.log")
+    platform = openmm.Platform.getPlatformByName(args.platform)
+    document = ResultsDocument(name, title, quick=args.quick, platform=args.platform, threads=args.threads,
+                               about=f"Method: the docstring of `benchmarks/{name}.py`.")
+    return platform, cpuProperties(platform, args.threads), document
+
+
 def markdownTable(columns, rows):
     """Lines of a Markdown table: columns are headings, rows lists of cells (numbers formatted by
     the caller); a column whose cells are all numbers is right-aligned."""

@@ -36,8 +36,8 @@ from openmm import unit
 
 import openmmrigid
 import openmmrigid.testing
-from benchmarking import (RESULTS, ResultsDocument, blockMean, cpuProperties, openLog, principalKineticEnergies,
-                          pyplot, saveFigure, say, stamp, writeCsv)
+from benchmarking import (RESULTS, blockMean, openRun, principalKineticEnergies, pyplot, saveFigure, say, stamp,
+                          writeCsv)
 
 TEMPERATURE = 300.0
 BOLTZMANN = unit.MOLAR_GAS_CONSTANT_R.value_in_unit(unit.kilojoule_per_mole/unit.kelvin)
@@ -155,12 +155,7 @@ def plot(rows, args, document):
 
 def main():
     args = parseArguments()
-    openLog(RESULTS/"langevin_axes.log")
-    platform = openmm.Platform.getPlatformByName(args.platform)
-    properties = cpuProperties(platform, args.threads)
-    document = ResultsDocument("langevin_axes", "Rigid water at large Langevin steps: temperature by motion",
-                               quick=args.quick, platform=args.platform, threads=args.threads,
-                               about="Method: the docstring of `benchmarks/langevin_axes.py`.")
+    platform, properties, document = openRun("langevin_axes", "Rigid water at large Langevin steps: temperature by motion", args)
     started, rows = time.time(), []
     for model in args.models:
         stamp(f"{model}: building and equilibrating {args.waters} waters")

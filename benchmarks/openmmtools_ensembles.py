@@ -41,7 +41,7 @@ from openmm import app, unit
 from openmmtools import cache, mcmc, states, testsystems
 
 import openmmrigid
-from benchmarking import RESULTS, ResultsDocument, blockMean, cpuProperties, openLog, say, stamp
+from benchmarking import blockMean, openRun, say, stamp
 from openmmrigid.openmmtools import RigidBussiDynamicsMove, RigidLangevinDynamicsMove
 
 KB = unit.MOLAR_GAS_CONSTANT_R.value_in_unit(unit.kilojoule_per_mole / unit.kelvin)
@@ -149,12 +149,7 @@ def main():
     if args.quick:
         args.time = 2.0
     logging.getLogger("openmmtools").setLevel(logging.ERROR)
-    openLog(RESULTS/"openmmtools_ensembles.log")
-    platform = openmm.Platform.getPlatformByName(args.platform)
-    properties = cpuProperties(platform, args.threads)
-    document = ResultsDocument("openmmtools_ensembles", "The ensembles openmmtools gives the rigid-body integrators",
-                               quick=args.quick, platform=args.platform, threads=args.threads,
-                               about="Method: the docstring of `benchmarks/openmmtools_ensembles.py`.")
+    platform, properties, document = openRun("openmmtools_ensembles", "The ensembles openmmtools gives the rigid-body integrators", args)
     stamp("building and equilibrating the water box")
     system, state, bodies = waterBox(args.edge, platform, properties)
     dof = 6 * len(bodies)

@@ -44,8 +44,8 @@ from openmm import unit
 
 import openmmrigid
 import openmmrigid.testing
-from benchmarking import (RESULTS, ResultsDocument, blockMean, cpuProperties, openLog, principalKineticEnergies, pyplot,
-                          saveFigure, say, stamp, writeCsv)
+from benchmarking import (RESULTS, blockMean, openRun, principalKineticEnergies, pyplot, saveFigure, say, stamp,
+                          writeCsv)
 import inertia_sampling
 from nvt_accuracy import BOLTZMANN, FRICTION, TEMPERATURE
 
@@ -181,12 +181,7 @@ def configurations(quick):
 
 def main():
     args = parseArguments()
-    openLog(RESULTS/"step_cap.log")
-    platform = openmm.Platform.getPlatformByName(args.platform)
-    properties = cpuProperties(platform, args.threads)
-    document = ResultsDocument("step_cap", "What caps the step of rigid water with raised moments: rotation or translation",
-                               quick=args.quick, platform=args.platform, threads=args.threads,
-                               about="Method: the docstring of `benchmarks/step_cap.py`.")
+    platform, properties, document = openRun("step_cap", "What caps the step of rigid water with raised moments: rotation or translation", args)
     started, rows = time.time(), []
     for name in args.systems:
         stamp(f"{name}: building; reference and start from inertia_sampling's store")

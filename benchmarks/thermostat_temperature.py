@@ -35,8 +35,7 @@ import openmm
 from openmm import app, unit
 
 import openmmrigid
-from benchmarking import (RESULTS, ResultsDocument, blockMean, cpuProperties, molecularKineticEnergies, openLog, say, stamp,
-                          writeCsv)
+from benchmarking import RESULTS, blockMean, molecularKineticEnergies, openRun, say, stamp, writeCsv
 
 TEMPERATURE = 300.0
 BOLTZMANN = unit.MOLAR_GAS_CONSTANT_R.value_in_unit(unit.kilojoule_per_mole/unit.kelvin)
@@ -142,12 +141,7 @@ def tabulate(rows, waters, args, document):
 
 def main():
     args = parseArguments()
-    openLog(RESULTS/"thermostat_temperature.log")
-    platform = openmm.Platform.getPlatformByName(args.platform)
-    properties = cpuProperties(platform, args.threads)
-    document = ResultsDocument("thermostat_temperature", "Which temperature each thermostat reads, against the step",
-                               quick=args.quick, platform=args.platform, threads=args.threads,
-                               about="Method: the docstring of `benchmarks/thermostat_temperature.py`.")
+    platform, properties, document = openRun("thermostat_temperature", "Which temperature each thermostat reads, against the step", args)
     started = time.time()
     stamp("building and equilibrating the water box (LangevinMiddleIntegrator + SETTLE, 10 ps)")
     system, state = equilibratedBox(args.edge, platform, properties)
