@@ -11,11 +11,13 @@ the kinetic energy's otherwise), next to the time the integrator's own check fir
 
 Runs (name: integrator, step): L<dt>f<friction>: RigidBodyLangevinIntegrator; BV<dt>, BO<dt>:
 RigidBodyIntegrator with the Bussi thermostat (tau 1 ps), Verlet or Omelyan2; NVE<dt>, NVEO<dt>:
-without a thermostat.
+without a thermostat. A suffix m<k> raises every moment of inertia to at least k/100 amu nm^2
+(setMinimumMomentOfInertia): L14f1m4 is Langevin at 14 fs, friction 1/ps, moments of at least 0.04.
 
     python benchmarks/accuracy_check.py --quick          # 216 waters, L8f1 and L10f1, 10 ps each: minutes
     python benchmarks/accuracy_check.py                   # every run, 216 waters, 40 ps: docs/results/accuracy_check.md
     python benchmarks/accuracy_check.py --molecules 500 --runs L10f1 BV6 L8f1 BO6 --time 30
+    python benchmarks/accuracy_check.py --molecules 500 --runs L12f1m4 L14f1m4 L16f1m4 --time 30
 """
 
 import argparse
@@ -39,13 +41,18 @@ RUNS = ["L10f1", "L11f1", "BV6", "BV8", "NVE10", "L1f1", "L2f1", "L4f1", "L6f1",
 
 
 def makeIntegrator(name):
-    match = re.fullmatch(r"(L|BV|BO|NVEO|NVE)(\d+)(?:f(\d+))?", name)
+    match = re.fullmatch(r"(L|BV|BO|NVEO|NVE)(\d+)(?:f(\d+))?(?:m(\d+))?", name)
     if match is None:
         raise SystemExit(f"unknown run {name}")
-    kind, step, friction = match.group(1), float(match.group(2))*1e-3, match.group(3)
+    kind, step, friction, minimum = match.group(1), float(match.group(2))*1e-3, match.group(3), match.group(4)
     if kind == "L":
-        return openmmrigid.RigidBodyLangevinIntegrator(300, float(friction or 1), step)
-    integrator = openmmrigid.RigidBodyIntegrator(step)
+        integrator = openmmrigid.RigidBodyLangevinIntegrator(300, float(friction or 1), step)
+    else:
+        integrator = openmmrigid.RigidBodyIntegrator(step)
+    if minimum:
+        integrator.setMinimumMomentOfInertia(float(minimum)*0.01)
+    if kind == "L":
+        return integrator
     integrator.setSplitting(openmmrigid.RigidBodyIntegrator.Omelyan2 if kind in ("BO", "NVEO") else openmmrigid.RigidBodyIntegrator.Verlet)
     if kind in ("BV", "BO"):
         integrator.setThermostat(300, 1.0)
@@ -57,6 +64,9 @@ def run(name, system, state, platform, properties, picoseconds, every=0.05):
     dt = integrator.getStepSize().value_in_unit(unit.picosecond)
     context = openmm.Context(system, integrator, platform, properties)
     context.setState(state)
+    if integrator.getMinimumMomentOfInertia().value_in_unit(unit.amu*unit.nanometer**2) > 0:
+        # the equilibrated velocities keep their angular velocity: I'/I times too hot in rotation
+        context.setVelocitiesToTemperature(300, 1)
     integrator.setMeasureShadowWork(True)
     dof = integrator.getNumDegreesOfFreedom()
     n = max(1, int(round(every/dt)))

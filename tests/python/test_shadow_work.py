@@ -349,6 +349,25 @@ def test_accuracy_check_fires_for_verlet_with_the_bussi_thermostat_at_8_fs(water
         assert words in message, (words, message)
 
 
+@pytest.mark.parametrize("langevin", [True, False], ids=["langevin-11fs", "bussi-verlet-8fs"])
+def test_accuracy_check_with_raised_moments_does_not_suggest_raising_them(water_state, langevin):
+    """A run whose moments are raised already is told where raised moments stop helping (rigid water:
+    14 fs at friction 1/ps, where the translation caps the step), not to raise them. The minimum of
+    0.007 amu nm^2 raises only TIP3P's smallest moment (0.0061), so the runs fire as without it."""
+    if langevin:
+        integrator = RigidBodyLangevinIntegrator(300, 1, 0.011)
+    else:
+        integrator = RigidBodyIntegrator(0.008)
+        integrator.setThermostat(300, 1.0)
+    integrator.setMinimumMomentOfInertia(0.007)
+    fired, caught = run_checked(water_state, integrator, 12)
+    assert fired is not None and fired <= 6.0, fired
+    message = str(caught[0].message)
+    assert "raised moments of inertia for the bodies" not in message, message
+    for words in ("smaller step", "moments of inertia are raised already", "14 fs", "translation"):
+        assert words in message, (words, message)
+
+
 @pytest.mark.parametrize("kind", ["langevin-4fs", "bussi-omelyan2-6fs"])
 def test_accuracy_check_is_quiet_inside_the_range(water_state, kind):
     if kind == "langevin-4fs":
