@@ -49,13 +49,11 @@ def makeIntegrator(name):
         integrator = openmmrigid.RigidBodyLangevinIntegrator(300, float(friction or 1), step)
     else:
         integrator = openmmrigid.RigidBodyIntegrator(step)
+        integrator.setSplitting(openmmrigid.RigidBodyIntegrator.Omelyan2 if kind in ("BO", "NVEO") else openmmrigid.RigidBodyIntegrator.Verlet)
+        if kind in ("BV", "BO"):
+            integrator.setThermostat(300, 1.0)
     if minimum:
         integrator.setMinimumMomentOfInertia(float(minimum)*0.01)
-    if kind == "L":
-        return integrator
-    integrator.setSplitting(openmmrigid.RigidBodyIntegrator.Omelyan2 if kind in ("BO", "NVEO") else openmmrigid.RigidBodyIntegrator.Verlet)
-    if kind in ("BV", "BO"):
-        integrator.setThermostat(300, 1.0)
     return integrator
 
 

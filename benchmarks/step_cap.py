@@ -32,6 +32,7 @@ and benchmarks/results/step_cap.csv.
 """
 
 import argparse
+import collections
 import math
 import textwrap
 import time
@@ -53,15 +54,16 @@ SYSTEMS = {"tip4pew-nvt": "TIP4P-Ew", "tip3p-nvt": "TIP3P"}
 SAMPLE_EVERY = 0.1   # ps
 DISCARD = 2.0        # ps
 
-# label -> (description, rigid, heavy hydrogens, mass factor, minimum moment (amu nm^2), steps in fs)
+# minimum: the minimum moment of inertia (amu nm^2); steps in fs
+Configuration = collections.namedtuple("Configuration", "description rigid heavyHydrogens massFactor minimum steps")
 CONFIGURATIONS = {
-    "raised-0.04": ("RigidBodyLangevinIntegrator, moments >= 0.04", True, False, 1.0, 0.04, [14, 16, 18]),
-    "raised-0.16": ("RigidBodyLangevinIntegrator, moments >= 0.16", True, False, 1.0, 0.16, [14, 16, 18]),
-    "raised-0.16, mass x2": ("RigidBodyLangevinIntegrator, moments >= 0.16, every mass doubled", True, False, 2.0, 0.16,
-                             [16, 18, 20, 22, 24]),
-    "stock-heavy": ("LangevinMiddleIntegrator + SETTLE, water H 4 amu", False, True, 1.0, 0.0, [12, 14, 16]),
-    "stock-heavy, mass x2": ("LangevinMiddleIntegrator + SETTLE, water H 4 amu, every mass doubled", False, True, 2.0, 0.0,
-                             [14, 16, 18, 20]),
+    "raised-0.04": Configuration("RigidBodyLangevinIntegrator, moments >= 0.04", True, False, 1.0, 0.04, [14, 16, 18]),
+    "raised-0.16": Configuration("RigidBodyLangevinIntegrator, moments >= 0.16", True, False, 1.0, 0.16, [14, 16, 18]),
+    "raised-0.16, mass x2": Configuration("RigidBodyLangevinIntegrator, moments >= 0.16, every mass doubled", True, False,
+                                          2.0, 0.16, [16, 18, 20, 22, 24]),
+    "stock-heavy": Configuration("LangevinMiddleIntegrator + SETTLE, water H 4 amu", False, True, 1.0, 0.0, [12, 14, 16]),
+    "stock-heavy, mass x2": Configuration("LangevinMiddleIntegrator + SETTLE, water H 4 amu, every mass doubled", False,
+                                          True, 2.0, 0.0, [14, 16, 18, 20]),
 }
 
 
@@ -74,10 +76,9 @@ def withMasses(system, factor):
 
 
 def makeIntegrator(config, stepFs, seed):
-    _, rigid, _, _, floor, _ = config
-    if rigid:
+    if config.rigid:
         integrator = openmmrigid.RigidBodyLangevinIntegrator(TEMPERATURE, FRICTION, stepFs*unit.femtoseconds)
-        integrator.setMinimumMomentOfInertia(floor)
+        integrator.setMinimumMomentOfInertia(config.minimum)
     else:
         integrator = openmm.LangevinMiddleIntegrator(TEMPERATURE, FRICTION, stepFs*unit.femtoseconds)
     integrator.setRandomNumberSeed(seed)
@@ -94,7 +95,7 @@ def run(system, state, config, stepFs, seed, waters, args, platform, properties)
     masses = openmmrigid.testing.particleMasses(system)
     molecules = np.flatnonzero(masses > 0).reshape(-1, 3)
     count = len(molecules)
-    dof = integrator.getNumDegreesOfFreedom() if config[1] else openmmrigid.testing.degreesOfFreedom(system)
+    dof = integrator.getNumDegreesOfFreedom() if config.rigid else openmmrigid.testing.degreesOfFreedom(system)
     every = max(1, int(round(SAMPLE_EVERY*1000/stepFs)))
     samples, failure = [], ""
     with warnings.catch_warnings(record=True) as caught:
@@ -176,7 +177,7 @@ def parseArguments():
 def configurations(quick):
     if not quick:
         return CONFIGURATIONS
-    return {label: CONFIGURATIONS[label][:5] + ([16, 18],) for label in ("raised-0.16", "raised-0.16, mass x2")}
+    return {label: CONFIGURATIONS[label]._replace(steps=[16, 18]) for label in ("raised-0.16", "raised-0.16, mass x2")}
 
 
 def main():
@@ -193,8 +194,8 @@ def main():
         waters = inertia_sampling.Waters(topology).count
         table = []
         for label, config in configurations(args.quick).items():
-            model = withMasses(heavy if config[2] else system, config[3])
-            for stepFs in config[5]:
+            model = withMasses(heavy if config.heavyHydrogens else system, config.massFactor)
+            for stepFs in config.steps:
                 results = []
                 for seed in range(1, args.seeds + 1):
                     stamp(f"{name}: {label} at {stepFs:g} fs, seed {seed}")
@@ -202,7 +203,7 @@ def main():
                 failures = [failure for _, _, failure in results if failure]
                 good = [result for result, _, failure in results if not failure]
                 warned = sum(w for _, w, _ in results)
-                standardStep = stepFs/math.sqrt(config[3])
+                standardStep = stepFs/math.sqrt(config.massFactor)
                 cells = [SYSTEMS[name], label, f"{stepFs:g}", f"{standardStep:.1f}"]
                 row = dict(system=name, configuration=label, step_fs=stepFs, standard_mass_step_fs=standardStep,
                            runs=len(results), failed=len(failures), check_warned=warned, T_reported=None,
@@ -218,7 +219,7 @@ def main():
                 else:
                     cells += ["", "", "", ""]
                 cells += [(f"{len(failures)} of {len(results)}: {failures[0]}" if failures else "none"),
-                          (f"{warned} of {len(results)}" if config[1] else "")]
+                          (f"{warned} of {len(results)}" if config.rigid else "")]
                 table.append(cells)
                 rows.append(row)
                 say(" | ".join(cells))
