@@ -345,6 +345,11 @@ def ensureStarts(name, store, indices, args, platform, properties):
     made), the one model it samples."""
     if not indices:
         return
+    needed = [startPath(store, k) for k in range(max(indices) + 1)]
+    if SYSTEMS[name].get("rigidSolute"):
+        needed += [startPath(store, k, rigid=True) for k in indices]
+    if all(path.exists() for path in needed):
+        return
     spec, topology, system, nptSystem, positions = build(name)
     for k in range(max(indices) + 1):
         path = startPath(store, k)
