@@ -102,7 +102,8 @@ void AccuracyCheck::closeWindow() {
         head << setting.description << " at a step of " << 1000.0*setting.stepSize << " fs";
         if (setting.friction > 0.0)
             head << " and friction " << setting.friction << "/ps";
-        message = head.str() + " has left its accurate range: " + text.str() + ". Its averages are biased. " + setting.remedies;
+        message = head.str() + " has left its accurate range: " + text.str() + ". Its averages are biased. " + setting.remedies +
+                "; setAccuracyCheck(False) turns this check off.";
     }
 }
 

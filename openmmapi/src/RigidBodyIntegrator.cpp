@@ -85,11 +85,10 @@ AccuracyCheck::Setting RigidBodyIntegrator::getAccuracySetting() const {
         setting.remedies = "Use a smaller step or the Omelyan2 splitting (setSplitting(RigidBodyIntegrator.Omelyan2), right for "
                 "rigid water at 6 and 8 fs where Verlet is wrong above 4 fs); the moments of inertia are raised already, and "
                 "raising them further does not help past the step the translation allows (rigid water: 14 fs with Langevin "
-                "dynamics); setAccuracyCheck(False) turns this check off.";
+                "dynamics)";
     else
         setting.remedies = "Use a smaller step, the Omelyan2 splitting (setSplitting(RigidBodyIntegrator.Omelyan2), right for rigid "
-                "water at 6 and 8 fs where Verlet is wrong above 4 fs), or raised moments of inertia for the bodies; "
-                "setAccuracyCheck(False) turns this check off.";
+                "water at 6 and 8 fs where Verlet is wrong above 4 fs), or raised moments of inertia for the bodies";
     return setting;
 }
 

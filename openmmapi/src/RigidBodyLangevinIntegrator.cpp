@@ -60,11 +60,10 @@ AccuracyCheck::Setting RigidBodyLangevinIntegrator::getAccuracySetting() const {
     // allows (benchmarks/step_cap.py: rigid water 14 fs at friction 1/ps, whatever the minimum).
     if (getMinimumMomentOfInertia() > 0.0)
         setting.remedies = "Use a smaller step (rigid water at friction 1/ps, its moments of inertia raised: at most 14 fs, "
-                "where the translation limits the step and the moments of inertia are raised already) or more friction; "
-                "setAccuracyCheck(False) turns this check off.";
+                "where the translation limits the step and the moments of inertia are raised already) or more friction";
     else
         setting.remedies = "Use a smaller step (rigid water at friction 1/ps: at most 8 fs), more friction (10/ps keeps rigid "
-                "water right at 10 fs), or raised moments of inertia for the bodies; setAccuracyCheck(False) turns this check off.";
+                "water right at 10 fs), or raised moments of inertia for the bodies";
     return setting;
 }
 

@@ -64,7 +64,8 @@ public:
         int dof = 0;
         /** Whether a global thermostat rescales the momenta (Bussi's): the fluctuation is then judged too. */
         bool rescaling = false;
-        /** What runs (the class, and its splitting), and what to do about it (the end of the message). */
+        /** What runs (the class, and its splitting), and what to do about it: one clause, which the message
+         *  ends with how to turn the check off. */
         std::string description, remedies;
         bool operator==(const Setting& other) const {
             return stepSize == other.stepSize && friction == other.friction && temperature == other.temperature &&
