@@ -11,8 +11,10 @@
  *   advance           FreeRotor::advance: construct and evolve once, fused,  *
  *                     with the input checks.                                 *
  *   core-advance      rigidRotorAdvance, the core's unchecked entry point    *
- *                     with the body's RigidShape classified beforehand: what *
- *                     an integrator's drift calls per body and step.         *
+ *                     with the body's RigidShape classified beforehand.      *
+ *   lanes             advanceFreeRotors: the same for RigidLanes bodies at   *
+ *                     once (the vectorized rigidRotorAdvanceLanes), per body:*
+ *                     what the host platforms' drift calls.                  *
  *                                                                            *
  * Inputs (8192 random states per kind, and random times) are prepared in     *
  * advance and cycled through; every result is stored and summed into a      *
@@ -25,6 +27,7 @@
  *   CSV,kind,mode,representation,median_ns,min_ns,max_ns,repetitions,calls   *
  * -------------------------------------------------------------------------- */
 
+#include "internal/RotorLanes.h"
 #include "numerics/FreeRotor.h"
 #include <algorithm>
 #include <chrono>
@@ -201,6 +204,28 @@ int main() {
                 }
             };
             rows.push_back({c.kind, "core-advance", representation, time(coreAdvance)});
+            total += checksum(outputs);
+            // The same, RigidLanes consecutive inputs per call, at the time of the first (INPUTS is a multiple of RigidLanes).
+            auto lanes = [&]() {
+                for (int call = 0; call < CALLS; call += RigidLanes) {
+                    const int first = call%INPUTS;
+                    double omega[RigidLanes][3], attitude[RigidLanes][3][3];
+                    for (int lane = 0; lane < RigidLanes; lane++)
+                        for (int i = 0; i < 3; i++) {
+                            omega[lane][i] = in[first + lane].omega[i];
+                            for (int j = 0; j < 3; j++)
+                                attitude[lane][i][j] = in[first + lane].attitude[i][j];
+                        }
+                    advanceFreeRotors(RigidLanes, &shape[first], omega, attitude, in[first].t);
+                    for (int lane = 0; lane < RigidLanes; lane++)
+                        for (int i = 0; i < 3; i++) {
+                            out[first + lane].omega[i] = omega[lane][i];
+                            for (int j = 0; j < 3; j++)
+                                out[first + lane].attitude[i][j] = attitude[lane][i][j];
+                        }
+                }
+            };
+            rows.push_back({c.kind, "lanes", representation, time(lanes)});
             total += checksum(outputs);
         }
         // Evolve only: one rotor, many different times spread over several rotation periods.

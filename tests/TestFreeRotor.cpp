@@ -18,11 +18,13 @@
  * -------------------------------------------------------------------------- */
 
 #include "RandomRotation.h"
+#include "internal/RotorLanes.h"
 #include "numerics/FreeRotor.h"
 #include "numerics/SymmetricEigen.h"
 #include "openmm/internal/AssertionUtilities.h"
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <iostream>
 #include <limits>
 #include <random>
@@ -1022,6 +1024,76 @@ void testCoreAdvance() {
     }
 }
 
+/** Whether two arrays of doubles are the same bits (so -0.0 differs from 0.0, and NaN is caught). */
+static bool sameBits(const double* a, const double* b, int n) {
+    return std::memcmp(a, b, n*sizeof(double)) == 0;
+}
+
+/**
+ * The host platforms' drift turns bodies RigidLanes at a time (advanceFreeRotors, the library's
+ * vectorized rigidRotorAdvanceLanes): each body must come out as rigidRotorAdvance() gives it, bit
+ * for bit, for every kind and delicate body, whichever bodies share the lanes and however many
+ * there are. The bodies include asymmetric tops whose theta series need from 2 to 8 terms side by
+ * side and tops on both sides of the automatic choice's limit m = 0.9999 (in lanes below it, the
+ * scalar elliptic integral above it). The inline core function, as this test compiles it, is checked
+ * the same way.
+ */
+void testRotorsInLanes() {
+    std::vector<Body> bodies = allBodies(6);
+    std::vector<Body> spread = randomBodies(FreeRotor::Asymmetric, 40);
+    bodies.insert(bodies.end(), spread.begin(), spread.end());
+    int belowLimit = 0, aboveLimit = 0, fewestTerms = 100, mostTerms = 0;
+    for (double offset = 1e-7; offset < 1e-2; offset *= 1.6)
+        for (double sign : {1.0, -1.0}) {
+            Vector3 moments = {1.3, 2.9, 4.1};
+            bodies.push_back({moments, nearSeparatrixOmega(moments, {0.7, -1.1, 0.9}, sign*offset),
+                              RigidBodyTestSupport::randomRotation(normal), "near the automatic limit, offset " + str(sign*offset)});
+        }
+    for (const Body& body : bodies) {
+        FreeRotor rotor = makeRotor(body);
+        const RigidRotor& core = rotor.getCore();
+        if (core.kind != RigidKindAsymmetric || core.steady)
+            continue;
+        belowLimit += (core.m <= rigidAutomaticThetaSeriesLimit() && core.m > 0.999);
+        aboveLimit += (core.m > rigidAutomaticThetaSeriesLimit());
+        if (core.representation == RigidRepresentationThetaSeries) {
+            fewestTerms = std::min(fewestTerms, core.thetaTerms);
+            mostTerms = std::max(mostTerms, core.thetaTerms);
+        }
+    }
+    ASSERT(belowLimit >= 2 && aboveLimit >= 2);
+    ASSERT(fewestTerms <= 3 && mostTerms == 8);
+    const int numBodies = bodies.size();
+    for (int count = 1; count <= RigidLanes; count++)
+        for (int first = 0; first < numBodies; first++) {
+            const double t = std::vector<double>{0.0, 0.02, -1.1, 30.0}[(first + count)%4];
+            RigidShape shapes[RigidLanes];
+            double omega[RigidLanes][3], attitude[RigidLanes][3][3], omegaInline[RigidLanes][3], attitudeInline[RigidLanes][3][3];
+            double expectedOmega[RigidLanes][3], expectedAttitude[RigidLanes][3][3];
+            std::string names;
+            for (int lane = 0; lane < count; lane++) {
+                // neighbours, and bodies far apart in the list, share the lanes
+                const Body& body = bodies[(first + lane*(1 + first%7))%numBodies];
+                names += body.name + "; ";
+                shapes[lane] = FreeRotor::classify(body.moments);
+                for (int i = 0; i < 3; i++) {
+                    omega[lane][i] = omegaInline[lane][i] = expectedOmega[lane][i] = body.omega[i];
+                    for (int j = 0; j < 3; j++)
+                        attitude[lane][i][j] = attitudeInline[lane][i][j] = expectedAttitude[lane][i][j] = body.attitude[i][j];
+                }
+                ASSERT_EQUAL(RigidStatusOk, rigidRotorAdvance(&shapes[lane], expectedOmega[lane], expectedAttitude[lane], t));
+            }
+            advanceFreeRotors(count, shapes, omega, attitude, t);
+            ASSERT_EQUAL(RigidStatusOk, rigidRotorAdvanceLanes(count, shapes, omegaInline, attitudeInline, t));
+            for (int lane = 0; lane < count; lane++)
+                if (!sameBits(expectedOmega[lane], omega[lane], 3) || !sameBits(&expectedAttitude[lane][0][0], &attitude[lane][0][0], 9) ||
+                        !sameBits(expectedOmega[lane], omegaInline[lane], 3) ||
+                        !sameBits(&expectedAttitude[lane][0][0], &attitudeInline[lane][0][0], 9))
+                    throw std::runtime_error("lane " + std::to_string(lane) + " of " + std::to_string(count) +
+                                             " differs from rigidRotorAdvance at t = " + str(t) + "; lanes: " + names);
+        }
+}
+
 int main() {
     try {
         testPaperExample();
@@ -1041,6 +1113,7 @@ int main() {
         testInvalidInput();
         testClassification();
         testCoreAdvance();
+        testRotorsInLanes();
     }
     catch (const std::exception& e) {
         std::cout << "exception: " << e.what() << std::endl;

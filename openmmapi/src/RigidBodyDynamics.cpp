@@ -1,4 +1,5 @@
 #include "internal/RigidBodyDynamics.h"
+#include "internal/RotorLanes.h"
 #include "numerics/Philox.h"
 #include "numerics/RigidCore.h"
 #include "numerics/SymmetricEigen.h"
@@ -74,27 +75,41 @@ void RigidBodyDynamics::requireConstraints() const {
         throw OpenMMException(system.getClassName() + ": internal error: no solver for the constraints among free particles");
 }
 
-void RigidBodyDynamics::forEachBody(const function<void(int)>& task) {
-    // An exception must not escape a worker thread: the first one is kept and rethrown here.
-    const int numBodies = states.size();
-    mutex errorLock;
-    string error;
-    auto guarded = [&](int b) {
-        try {
-            task(b);
-        }
-        catch (const exception& e) {
-            lock_guard<mutex> lock(errorLock);
-            if (error.empty())
-                error = e.what();
-        }
-    };
-    forEachRange(numBodies, 64, [&](int, int begin, int end) {
-        for (int b = begin; b < end; b++)
-            guarded(b);
-    });
+bool RigidBodyDynamics::FirstError::guard(const function<void()>& task) {
+    // An exception must not escape a worker thread: the first one is kept and rethrown by rethrow().
+    try {
+        task();
+        return true;
+    }
+    catch (const exception& e) {
+        lock_guard<mutex> lock(errorLock);
+        if (error.empty())
+            error = e.what();
+        return false;
+    }
+}
+
+void RigidBodyDynamics::FirstError::rethrow() const {
     if (!error.empty())
         throw OpenMMException(error);
+}
+
+void RigidBodyDynamics::forEachBody(const function<void(int)>& task) {
+    FirstError error;
+    forEachRange(states.size(), 64, [&](int, int begin, int end) {
+        for (int b = begin; b < end; b++)
+            error.guard([&]() { task(b); });
+    });
+    error.rethrow();
+}
+
+void RigidBodyDynamics::forEachBodyGroup(int size, const function<void(int begin, int end, FirstError& error)>& task) {
+    FirstError error;
+    forEachRange(states.size(), 64, [&](int, int begin, int end) {
+        for (int first = begin; first < end; first += size)
+            task(first, min(end, first + size), error);
+    });
+    error.rethrow();
 }
 
 void RigidBodyDynamics::forEachRange(int count, int minimum, const function<void(int thread, int begin, int end)>& task) const {
@@ -206,31 +221,53 @@ void RigidBodyDynamics::projectVelocities(vector<Vec3>& velocities) {
     writtenVelocities = velocities;
 }
 
-void RigidBodyDynamics::rotate(int b, double dt, RigidBodyOptions::RotationMethod method) {
+bool RigidBodyDynamics::rotatesExactly(int b, RigidBodyOptions::RotationMethod method) const {
+    // A linear body's free motion is a uniform rotation about L, which both methods take exactly:
+    // NO_SQUISH's turns about the perpendicular axes would move part of L onto the molecular axis,
+    // where the body can carry none.
+    const int kind = system.getShape(b).kind;
+    return kind != RigidKindPoint && (method == RigidBodyOptions::Exact || kind == RigidKindLinear);
+}
+
+void RigidBodyDynamics::rotateNoSquish(int b, double dt) {
     BodyState& state = states[b];
-    const RigidShape& shape = system.getShape(b);
-    if (shape.kind == RigidKindPoint)
-        return;
     Vector3 bodyMomentum = multiply(state.attitude, state.angularMomentum);
     double attitude[3][3];
     for (int i = 0; i < 3; i++)
         for (int j = 0; j < 3; j++)
             attitude[i][j] = state.attitude[i][j];
-    // A linear body's free motion is a uniform rotation about L, which both methods take exactly:
-    // NO_SQUISH's turns about the perpendicular axes would move part of L onto the molecular axis,
-    // where the body can carry none.
-    if (method == RigidBodyOptions::NoSquish && shape.kind != RigidKindLinear)
-        rigidNoSquishRotate(shape.moments, dt, attitude, bodyMomentum.data());
-    else {
-        // The exact rotation (numerics core). Its contract holds: the shape is classified, the
-        // attitude is kept orthonormal here and the momenta were checked finite in kickAndDrift().
-        Vector3 omega = bodyAngularVelocity(b, bodyMomentum);
-        rigidRotorAdvance(&shape, omega.data(), attitude, dt);
-    }
+    rigidNoSquishRotate(system.getShape(b).moments, dt, attitude, bodyMomentum.data());
     rigidReorthonormalize(attitude);
     for (int i = 0; i < 3; i++)
         for (int j = 0; j < 3; j++)
             state.attitude[i][j] = attitude[i][j];
+}
+
+void RigidBodyDynamics::rotateExactly(int count, const int* bodies, double dt) {
+    // The exact rotation (numerics core), RigidLanes bodies side by side. Its contract holds: the
+    // shapes are classified, the attitudes are kept orthonormal here and the momenta were checked
+    // finite in kickAndDrift().
+    RigidShape shapes[RigidLanes];
+    double omega[RigidLanes][3], attitude[RigidLanes][3][3];
+    for (int lane = 0; lane < count; lane++) {
+        const int b = bodies[lane];
+        const BodyState& state = states[b];
+        shapes[lane] = system.getShape(b);
+        const Vector3 w = bodyAngularVelocity(b, multiply(state.attitude, state.angularMomentum));
+        for (int i = 0; i < 3; i++) {
+            omega[lane][i] = w[i];
+            for (int j = 0; j < 3; j++)
+                attitude[lane][i][j] = state.attitude[i][j];
+        }
+    }
+    advanceFreeRotors(count, shapes, omega, attitude, dt);
+    for (int lane = 0; lane < count; lane++) {
+        BodyState& state = states[bodies[lane]];
+        rigidReorthonormalize(attitude[lane]);
+        for (int i = 0; i < 3; i++)
+            for (int j = 0; j < 3; j++)
+                state.attitude[i][j] = attitude[lane][i][j];
+    }
 }
 
 void RigidBodyDynamics::refreshMomenta(int b, const vector<Vec3>& positions, const vector<Vec3>& velocities) {
@@ -278,11 +315,8 @@ void RigidBodyDynamics::forceAndTorque(int b, const vector<Vec3>& positions, con
     }
 }
 
-void RigidBodyDynamics::driftBody(int b, double h, RigidBodyOptions::RotationMethod method, vector<Vec3>& positions) {
-    BodyState& state = states[b];
-    for (int k = 0; k < 3; k++)
-        state.center[k] += h*state.velocity[k];
-    rotate(b, h, method);
+void RigidBodyDynamics::placeParticles(int b, vector<Vec3>& positions) const {
+    const BodyState& state = states[b];
     const int n = system.getBodySize(b);
     const int* members = system.getBodyParticles(b);
     const Vector3* coordinates = system.getBodyCoordinates(b);
@@ -295,22 +329,40 @@ void RigidBodyDynamics::kickAndDrift(vector<Vec3>& positions, vector<Vec3>& velo
                                      double constraintTolerance) {
     requireConstraints();
     const bool kicks = (kick != 0.0);
-    forEachBody([&](int b) {
-        BodyState& state = states[b];
-        refreshMomenta(b, positions, velocities);
-        if (kicks) {
-            Vec3 force, torque;
-            forceAndTorque(b, positions, forces, force, torque);
-            Vec3 velocity = toVec3(state.velocity) + force*(kick/system.getBodyMass(b));
-            Vec3 angularMomentum = toVec3(state.angularMomentum) + torque*kick;
-            if (!(isfinite(velocity.dot(velocity)) && isfinite(angularMomentum.dot(angularMomentum))))
-                throw OpenMMException(notFiniteMessage(system.getClassName(), b));
-            state.velocity = toVector(velocity);
-            state.angularMomentum = toVector(angularMomentum);
+    // The bodies go in groups of RigidLanes: each is kicked and translated, then those that rotate
+    // exactly turn together (rotateExactly), then the group's particles are placed. A body whose
+    // kick or displacement check fails is left out of the rest of the step.
+    forEachBodyGroup(RigidLanes, [&](int begin, int end, FirstError& error) {
+        int exact[RigidLanes], numExact = 0;
+        bool moved[RigidLanes];
+        for (int b = begin; b < end; b++) {
+            moved[b - begin] = error.guard([&]() {
+                BodyState& state = states[b];
+                refreshMomenta(b, positions, velocities);
+                if (kicks) {
+                    Vec3 force, torque;
+                    forceAndTorque(b, positions, forces, force, torque);
+                    Vec3 velocity = toVec3(state.velocity) + force*(kick/system.getBodyMass(b));
+                    Vec3 angularMomentum = toVec3(state.angularMomentum) + torque*kick;
+                    if (!(isfinite(velocity.dot(velocity)) && isfinite(angularMomentum.dot(angularMomentum))))
+                        throw OpenMMException(notFiniteMessage(system.getClassName(), b));
+                    state.velocity = toVector(velocity);
+                    state.angularMomentum = toVector(angularMomentum);
+                }
+                checkDisplacement("body", b, sqrt(state.velocity[0]*state.velocity[0] + state.velocity[1]*state.velocity[1] +
+                                                  state.velocity[2]*state.velocity[2])*fabs(drift), drift);
+                for (int k = 0; k < 3; k++)
+                    state.center[k] += drift*state.velocity[k];
+            });
+            if (moved[b - begin] && rotatesExactly(b, method))
+                exact[numExact++] = b;
+            else if (moved[b - begin] && system.getShape(b).kind != RigidKindPoint)
+                rotateNoSquish(b, drift);
         }
-        checkDisplacement("body", b, sqrt(state.velocity[0]*state.velocity[0] + state.velocity[1]*state.velocity[1] +
-                                          state.velocity[2]*state.velocity[2])*fabs(drift), drift);
-        driftBody(b, drift, method, positions);
+        rotateExactly(numExact, exact, drift);
+        for (int b = begin; b < end; b++)
+            if (moved[b - begin])
+                placeParticles(b, positions);
     });
     const vector<int>& free = system.getFreeParticles();
     for (int p : free) {

@@ -14,6 +14,7 @@
 #include "numerics/core/CoreBasics.h"
 #include "numerics/core/CoreElliptic.h"
 #include "numerics/core/CoreRotor.h"
+#include "numerics/core/CoreRotorLanes.h"
 #include "numerics/core/CoreNoSquish.h"
 #include "numerics/core/CorePhilox.h"
 #include "numerics/core/CoreThermostat.h"
@@ -56,6 +57,27 @@ int coreCAdvance(const double* moments, double* omega, double* attitude, double 
     toMatrix(attitude, a);
     status = rigidRotorAdvance(&shape, omega, a, t);
     fromMatrix(a, attitude);
+    return status;
+}
+
+int coreCAdvanceLanes(int count, const double* moments, double* omega, double* attitude, double t) {
+    RigidShape shapes[RigidLanes];
+    double w[RigidLanes][3], a[RigidLanes][3][3];
+    int b, k, status;
+    for (b = 0; b < count; b++) {
+        status = rigidClassifyMoments(moments + 3*b, &shapes[b]);
+        if (status != RigidStatusOk)
+            return status;
+        for (k = 0; k < 3; k++)
+            w[b][k] = omega[3*b + k];
+        toMatrix(attitude + 9*b, a[b]);
+    }
+    status = rigidRotorAdvanceLanes(count, shapes, w, a, t);
+    for (b = 0; b < count; b++) {
+        for (k = 0; k < 3; k++)
+            omega[3*b + k] = w[b][k];
+        fromMatrix(a[b], attitude + 9*b);
+    }
     return status;
 }
 

@@ -13,6 +13,8 @@ extern "C" {
 
 int coreCClassify(const double* moments, int* kind, int* uniqueAxis, double* classified);
 int coreCAdvance(const double* moments, double* omega, double* attitude, double t);
+/** rigidRotorAdvanceLanes for count <= RigidLanes bodies: moments, omega and attitude of body b at 3b, 3b and 9b. */
+int coreCAdvanceLanes(int count, const double* moments, double* omega, double* attitude, double t);
 int coreCEvolve(const double* moments, const double* omega, const double* attitude, int representation, int count,
                 const double* times, double* omegaOut, double* attitudeOut, double* parameter, int* usedRepresentation);
 void coreCJacobi(double u, double m, double m1, double* sn, double* cn, double* dn);

@@ -179,6 +179,43 @@ void testRotor() {
     }
 }
 
+/**
+ * rigidRotorAdvanceLanes compiled as C, against FreeRotor::advance (the C++ scalar path): every group
+ * of up to RigidLanes consecutive bodies of the list, the ends of the frequency scaling included.
+ */
+void testRotorLanes() {
+    std::vector<Body> list = bodies();
+    const int numBodies = list.size();
+    for (int count = 1; count <= RigidLanes; count++)
+        for (int first = 0; first + count <= numBodies; first++) {
+            const double t = std::vector<double>{0.0, 0.03, -0.7}[first%3];
+            std::vector<double> moments(3*count), omega(3*count), attitude(9*count);
+            std::vector<Vector3> expectedOmega(count);
+            std::vector<Matrix3> expectedAttitude(count);
+            for (int b = 0; b < count; b++) {
+                const Body& body = list[first + b];
+                expectedAttitude[b] = RigidBodyTestSupport::randomRotation(normal);
+                expectedOmega[b] = body.omega;
+                copyAttitude(expectedAttitude[b], &attitude[9*b]);
+                for (int k = 0; k < 3; k++) {
+                    moments[3*b + k] = body.moments[k];
+                    omega[3*b + k] = body.omega[k];
+                }
+                FreeRotor::advance(body.moments, expectedOmega[b], expectedAttitude[b], t);
+            }
+            ASSERT_EQUAL(RigidStatusOk, coreCAdvanceLanes(count, moments.data(), omega.data(), attitude.data(), t));
+            for (int b = 0; b < count; b++) {
+                std::string where = "lane " + std::to_string(b) + " of " + std::to_string(count) + ", " +
+                                    describe(list[first + b], t);
+                for (int i = 0; i < 3; i++) {
+                    assertSameBits(expectedOmega[b][i], omega[3*b + i], "lanes omega, " + where, __LINE__);
+                    for (int j = 0; j < 3; j++)
+                        assertSameBits(expectedAttitude[b][i][j], attitude[9*b + 3*i + j], "lanes A, " + where, __LINE__);
+                }
+            }
+        }
+}
+
 /** The classification: kinds, unique axes, snapped moments and error statuses, C against C++. */
 void testClassification() {
     std::vector<Vector3> cases = {{1, 2, 3}, {2, 2, 2}, {2, 2, 3}, {3, 2, 2}, {2, 3, 2}, {0, 2, 2}, {2, 0, 2}, {2, 2, 0},
@@ -400,6 +437,7 @@ int main() {
         testCoreConstants();
         testClassification();
         testRotor();
+        testRotorLanes();
         testSpecialFunctions();
         testNoSquishAndRandomNumbers();
         testRaisedMoments();

@@ -8,6 +8,7 @@
 #include "openmm/Vec3.h"
 #include <cstdint>
 #include <functional>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -227,8 +228,24 @@ private:
     };
     /** The internal error of a stage that moves free particles with constraints but was given no solver. */
     void requireConstraints() const;
+    /** The first exception thrown by any of several tasks, kept to be rethrown by one thread. */
+    class FirstError {
+    public:
+        /** Run task(); if it throws, keep the first such error. Returns whether task() completed. */
+        bool guard(const std::function<void()>& task);
+        /** Throw the kept error, if any, as an OpenMMException. */
+        void rethrow() const;
+    private:
+        std::mutex errorLock;
+        std::string error;
+    };
     /** Run task(b) for every body, on the threads if there are any; the first exception is rethrown here. */
     void forEachBody(const std::function<void(int)>& task);
+    /**
+     * Run task(begin, end, error) for consecutive groups of at most `size` bodies, on the threads if
+     * there are any; the task guards each body's work with `error`, whose first exception is rethrown here.
+     */
+    void forEachBodyGroup(int size, const std::function<void(int begin, int end, FirstError& error)>& task);
     /**
      * Split 0 ... count - 1 into one contiguous range per thread and run task(thread, begin, end) on
      * each; serially, as one range, without threads or below `minimum` items.
@@ -241,11 +258,16 @@ private:
     /** The total force and the torque about the centre on body b. */
     void forceAndTorque(int b, const std::vector<OpenMM::Vec3>& positions, const std::vector<OpenMM::Vec3>& forces,
                         OpenMM::Vec3& force, OpenMM::Vec3& torque) const;
-    /** The free motion of body b for a time h, and its particles placed accordingly. */
-    void driftBody(int b, double h, RigidBodyOptions::RotationMethod method, std::vector<OpenMM::Vec3>& positions);
+    /** Place body b's particles at R + A^T b_i. */
+    void placeParticles(int b, std::vector<OpenMM::Vec3>& positions) const;
     /** Throw the "unstable" error if a drift would move a body or free particle further than the limit. */
     void checkDisplacement(const char* what, int index, double distance, double drift) const;
-    void rotate(int b, double dt, RigidBodyOptions::RotationMethod method);
+    /** Whether body b's free rotation is the exact one under `method` (every body but a point, except that NO_SQUISH turns non-linear bodies). */
+    bool rotatesExactly(int b, RigidBodyOptions::RotationMethod method) const;
+    /** NO_SQUISH's free rotation of body b for a time dt. */
+    void rotateNoSquish(int b, double dt);
+    /** The exact free rotation for a time dt of count <= RigidLanes bodies, side by side (rigidRotorAdvanceLanes). */
+    void rotateExactly(int count, const int* bodies, double dt);
     void fitBody(int b, std::vector<OpenMM::Vec3>& positions, std::vector<OpenMM::Vec3>& velocities);
     /** Replace body b's particle velocities by the rigid motion with their linear and angular momentum. */
     void projectBodyVelocities(int b, std::vector<OpenMM::Vec3>& velocities);

@@ -56,6 +56,7 @@ inline double rigidBitsDouble(RigidUInt64 bits) {
 #include "numerics/core/CoreBasics.h"
 #include "numerics/core/CoreElliptic.h"
 #include "numerics/core/CoreRotor.h"
+#include "numerics/core/CoreRotorLanes.h"
 #include "numerics/core/CoreNoSquish.h"
 #include "numerics/core/CorePhilox.h"
 #include "numerics/core/CoreThermostat.h"

@@ -559,6 +559,27 @@ RIGID_HOT_FUNCTION void rigidThetaPhase(RigidRotor* r, const RigidJacobi* f0) {
 }
 
 /**
+ * Theta-series coefficients, last part, from the series at u = eps (values, and the sums derivative
+ * and value of rigidThetaSeries): A2, A1, and f0 becomes sn, cn, dn at eps.
+ */
+RIGID_HOT_FUNCTION void rigidThetaFinish(RigidRotor* r, const RigidThetaValues* values, double derivative, double value,
+                                         RigidJacobi* f0) {
+    double size;
+    /* A2 (vZS eq. (3.53), (4.8); notes, initialization step 8): L/I1 + (pi wp / 2K) times the bracket
+     * [coth(x) - 2 sum q^{2n}/(1 - q^{2n}) (xi^n - xi^-n)], which is i theta_1'/theta_1 at i x
+     * (DLMF 20.5.10). Written with the theta series itself it is sum (2n+1) cr / (-sum ci): the same
+     * few terms instead of a Lambert series in q. */
+    r->phase2 = r->angularMomentum/r->internalMoments[0] + r->thetaScale*r->wp*derivative/value;
+    f0->sn = values->sn;
+    f0->cn = values->cn;
+    f0->dn = values->dn;
+    /* A1 = arg theta_1(eps) (vZS eq. (4.5); notes, initialization step 10); only its cosine and sine are needed. */
+    size = sqrt(values->re*values->re + values->im*values->im);
+    r->cosPhase1 = values->re/size;
+    r->sinPhase1 = values->im/size;
+}
+
+/**
  * The theta-series representation (vZS Section 4.1): its coefficients, A1 and A2, and the Jacobi
  * functions at eps in f0. With fused, the series is also evaluated at the scaled time
  * scaledTime, into *fusedValue, in the same pass. The coefficients drop their common factor q^{1/4},
@@ -566,7 +587,7 @@ RIGID_HOT_FUNCTION void rigidThetaPhase(RigidRotor* r, const RigidJacobi* f0) {
  */
 RIGID_HOT_FUNCTION int rigidThetaInitialize(RigidRotor* r, RigidJacobi* f0, int fused, double scaledTime,
                                         RigidThetaValues* fusedValue) {
-    double arguments[2], derivative, value, size;
+    double arguments[2], derivative, value;
     RigidThetaValues values[2];
     const int status = rigidThetaConstants(r);
     if (status != RigidStatusOk)
@@ -581,18 +602,7 @@ RIGID_HOT_FUNCTION int rigidThetaInitialize(RigidRotor* r, RigidJacobi* f0, int 
     }
     else
         rigidThetaSeries(r, 1, arguments, values, &derivative, &value);
-    /* A2 (vZS eq. (3.53), (4.8); notes, initialization step 8): L/I1 + (pi wp / 2K) times the bracket
-     * [coth(x) - 2 sum q^{2n}/(1 - q^{2n}) (xi^n - xi^-n)], which is i theta_1'/theta_1 at i x
-     * (DLMF 20.5.10). Written with the theta series itself it is sum (2n+1) cr / (-sum ci): the same
-     * few terms instead of a Lambert series in q. */
-    r->phase2 = r->angularMomentum/r->internalMoments[0] + r->thetaScale*r->wp*derivative/value;
-    f0->sn = values[0].sn;
-    f0->cn = values[0].cn;
-    f0->dn = values[0].dn;
-    /* A1 = arg theta_1(eps) (vZS eq. (4.5); notes, initialization step 10); only its cosine and sine are needed. */
-    size = sqrt(values[0].re*values[0].re + values[0].im*values[0].im);
-    r->cosPhase1 = values[0].re/size;
-    r->sinPhase1 = values[0].im/size;
+    rigidThetaFinish(r, &values[0], derivative, value, f0);
     return RigidStatusOk;
 }
 
@@ -614,6 +624,42 @@ RIGID_FUNCTION void rigidEllipticIntegralInitialize(RigidRotor* r, RigidJacobi* 
 }
 
 /**
+ * Initialization of an asymmetric top, the part before the representation: scaling, axis ordering,
+ * invariants and parameter, and sn, cn, dn of the initial argument in f0. Returns 0 (and marks the
+ * rotor steady) when omega lies along a principal axis to within the range of doubles; *scale is
+ * the frequency scale 2^e.
+ */
+RIGID_HOT_FUNCTION int rigidRotorAsymmetricStart(RigidRotor* r, double* scale, RigidJacobi* f0) {
+    double scaledOmega[3], w0[3];
+    *scale = rigidRotorScaleFrequency(r->omega0, scaledOmega);
+    rigidRotorOrderAxes(r, scaledOmega, w0);
+    if (!rigidRotorInvariants(r, w0) || !rigidRotorInitialArgument(r, w0, f0)) {
+        r->steady = 1;
+        return 0;
+    }
+    return 1;
+}
+
+/**
+ * Initialization of an asymmetric top, the part after the representation: B = T1'(omega(0))^T Q A(0)
+ * (notes, initialization step 4) from sn, cn, dn at u = eps as the representation evaluated them,
+ * and the frequency scale.
+ */
+RIGID_HOT_FUNCTION void rigidRotorAsymmetricFinish(RigidRotor* r, const RigidJacobi* f0, double scale) {
+    double qa[3][3], t1[3][3], b[3][3];
+    int j, c;
+    for (j = 0; j < 3; j++)
+        for (c = 0; c < 3; c++)
+            qa[j][c] = r->axisSign[j]*r->attitude0[r->axisOf[j]][c];
+    rigidBodyToInvariantFrame(r, f0->sn, f0->cn, f0->dn, t1);
+    rigidMultiplyTransposed(t1, qa, b);
+    for (j = 0; j < 3; j++)
+        for (c = 0; c < 3; c++)
+            r->b[j][c] = b[j][c];
+    r->frequencyScale = scale;
+}
+
+/**
  * Initialization of an asymmetric top that is not known to be steady: scaling, axis ordering,
  * invariants and parameter, initial argument, then the coefficients of the representation and
  * B = T1'(omega(0))^T Q A(0) (notes, initialization step 4). Each representation evaluates sn, cn, dn
@@ -623,15 +669,10 @@ RIGID_FUNCTION void rigidEllipticIntegralInitialize(RigidRotor* r, RigidJacobi* 
  */
 RIGID_FUNCTION int rigidRotorInitializeAsymmetric(RigidRotor* r, int requested, int fused, double t,
                                                   RigidThetaValues* fusedValue) {
-    double scaledOmega[3], w0[3], qa[3][3], t1[3][3], b[3][3];
     RigidJacobi f0;
-    int j, c;
-    const double scale = rigidRotorScaleFrequency(r->omega0, scaledOmega);
-    rigidRotorOrderAxes(r, scaledOmega, w0);
-    if (!rigidRotorInvariants(r, w0) || !rigidRotorInitialArgument(r, w0, &f0)) {
-        r->steady = 1;
+    double scale;
+    if (!rigidRotorAsymmetricStart(r, &scale, &f0))
         return RigidStatusOk;
-    }
     if (requested == RigidRepresentationAutomatic)
         requested = (r->m <= rigidAutomaticThetaSeriesLimit() ? RigidRepresentationThetaSeries :
                      RigidRepresentationEllipticIntegral);
@@ -646,35 +687,17 @@ RIGID_FUNCTION int rigidRotorInitializeAsymmetric(RigidRotor* r, int requested, 
     }
     else
         rigidEllipticIntegralInitialize(r, &f0);
-    for (j = 0; j < 3; j++)
-        for (c = 0; c < 3; c++)
-            qa[j][c] = r->axisSign[j]*r->attitude0[r->axisOf[j]][c];
-    rigidBodyToInvariantFrame(r, f0.sn, f0.cn, f0.dn, t1);
-    rigidMultiplyTransposed(t1, qa, b);
-    for (j = 0; j < 3; j++)
-        for (c = 0; c < 3; c++)
-            r->b[j][c] = b[j][c];
-    r->frequencyScale = scale;
+    rigidRotorAsymmetricFinish(r, &f0, scale);
     return RigidStatusOk;
 }
 
 /**
- * Build the rotor of a body from its initial state. Contract: shape from rigidClassifyMoments(),
- * omega and attitude finite, attitude orthonormal with determinant +1. For a linear body the
- * component of omega along its axis is dropped; a point does not turn (its omega becomes zero). With fused, an asymmetric top that
- * uses the theta series also evaluates the series at time t into *fusedValue (rigidRotorAdvance).
- *
- * @param requested  a RigidRepresentation
- * @return RigidStatusOk; RigidStatusUnknownRepresentation; RigidStatusThetaOnSeparatrix when the theta
- *         series is requested at m = 1; RigidStatusThetaNotConverged when it would need more than
- *         RigidMaxThetaTerms terms (never for the automatic choice).
+ * Initialization, common part: the kind, moments, initial state and energy, the steady rotations and
+ * the symmetric top's precession (see rigidRotorInitialize). Returns 1 for an asymmetric top that is
+ * not known to be steady, which rigidRotorInitializeAsymmetric() must then complete.
  */
-RIGID_FUNCTION int rigidRotorInitialize(RigidRotor* r, const RigidShape* shape, const double* omega, double attitude[3][3],
-                                        int requested, int fused, double t, RigidThetaValues* fusedValue) {
+RIGID_HOT_FUNCTION int rigidRotorSetUp(RigidRotor* r, const RigidShape* shape, const double* omega, double attitude[3][3]) {
     int k, j, zeroComponents = 0;
-    if (requested != RigidRepresentationAutomatic && requested != RigidRepresentationThetaSeries &&
-            requested != RigidRepresentationEllipticIntegral)
-        return RigidStatusUnknownRepresentation;
     r->kind = shape->kind;
     r->uniqueAxis = (shape->kind == RigidKindSymmetric ? shape->uniqueAxis : -1);
     r->representation = RigidRepresentationAutomatic;
@@ -698,7 +721,26 @@ RIGID_FUNCTION int rigidRotorInitialize(RigidRotor* r, const RigidShape* shape, 
                  r->kind == RigidKindPoint);
     if (r->kind == RigidKindSymmetric)
         r->symmetricPrecession = (1.0 - r->moments[r->uniqueAxis]/r->moments[(r->uniqueAxis + 1)%3])*r->omega0[r->uniqueAxis];
-    if (r->kind == RigidKindAsymmetric && !r->steady)
+    return r->kind == RigidKindAsymmetric && !r->steady;
+}
+
+/**
+ * Build the rotor of a body from its initial state. Contract: shape from rigidClassifyMoments(),
+ * omega and attitude finite, attitude orthonormal with determinant +1. For a linear body the
+ * component of omega along its axis is dropped; a point does not turn (its omega becomes zero). With fused, an asymmetric top that
+ * uses the theta series also evaluates the series at time t into *fusedValue (rigidRotorAdvance).
+ *
+ * @param requested  a RigidRepresentation
+ * @return RigidStatusOk; RigidStatusUnknownRepresentation; RigidStatusThetaOnSeparatrix when the theta
+ *         series is requested at m = 1; RigidStatusThetaNotConverged when it would need more than
+ *         RigidMaxThetaTerms terms (never for the automatic choice).
+ */
+RIGID_FUNCTION int rigidRotorInitialize(RigidRotor* r, const RigidShape* shape, const double* omega, double attitude[3][3],
+                                        int requested, int fused, double t, RigidThetaValues* fusedValue) {
+    if (requested != RigidRepresentationAutomatic && requested != RigidRepresentationThetaSeries &&
+            requested != RigidRepresentationEllipticIntegral)
+        return RigidStatusUnknownRepresentation;
+    if (rigidRotorSetUp(r, shape, omega, attitude))
         return rigidRotorInitializeAsymmetric(r, requested, fused, t, fusedValue);
     return RigidStatusOk;
 }

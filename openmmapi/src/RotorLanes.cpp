@@ -1,0 +1,38 @@
+/*
+ * The one translation unit that instantiates the core's rigidRotorAdvanceLanes() for the library.
+ * CMakeLists.txt compiles it with options that change no value the code computes but let GCC
+ * vectorize the loops over the lanes:
+ * - -fno-math-errno: sqrt is the instruction alone, without the call that would set errno for a
+ *   negative argument (there is none under the contract, and nothing reads errno);
+ * - -fno-trapping-math: a comparison or an operation of a lane that the select then discards may be
+ *   evaluated (no floating-point exception is observed anywhere);
+ * - -fallow-store-data-races: "x = keep ? x : next", which GCC rewrites as a conditional store, may
+ *   become a load, a select and a store. Every such store here is to the function's own local
+ *   arrays, which no other thread sees;
+ * - -fopenmp-simd: RIGID_LANE_LOOP below marks each loop over the lanes "omp simd".
+ * - -ffp-contract=off: no multiply-add is fused, in the AVX2 version below either.
+ * GCC builds the function twice on x86-64: for the baseline (SSE2, two lanes per instruction) and
+ * for AVX2 (four), chosen at load time by the processor (target_clones). Vector instructions round
+ * each element as the scalar ones do, so either gives rigidRotorAdvance()'s results bit for bit
+ * (TestFreeRotor checks it on the processor it runs on). On the Intel Xeon of 2026-12-04 the AVX2
+ * version takes 243 ns per asymmetric body, the SSE2 one 288 and rigidRotorAdvance 329
+ * (docs/results/free_rotor_cost.md).
+ */
+#if defined(__GNUC__) || defined(__clang__)
+#define RIGID_LANE_LOOP _Pragma("omp simd")
+#endif
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+#define RIGID_LANE_TARGETS __attribute__((target_clones("avx2", "default")))
+#else
+#define RIGID_LANE_TARGETS
+#endif
+
+#include "internal/RotorLanes.h"
+
+namespace OpenMMRigid {
+
+RIGID_LANE_TARGETS void advanceFreeRotors(int count, const RigidShape* shapes, double omega[][3], double attitude[][3][3], double t) {
+    rigidRotorAdvanceLanes(count, shapes, omega, attitude, t);
+}
+
+} // namespace OpenMMRigid
