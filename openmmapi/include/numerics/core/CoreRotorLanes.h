@@ -207,7 +207,7 @@ RIGID_HOT_FUNCTION void rigidThetaSeriesLanes(const RigidRotor* r, double u[2][R
     double re[2][RigidLanes], im[2][RigidLanes], zeta[2][RigidLanes];
     double nome2[RigidLanes], oddPower[RigidLanes], oddStep[RigidLanes], evenPower[RigidLanes], evenStep[RigidLanes];
     double sinhK[RigidLanes], coshK[RigidLanes], sinh2X[RigidLanes], cosh2X[RigidLanes], terms[RigidLanes];
-    double cr[RigidLanes], ci[RigidLanes];
+    double cr[RigidLanes], ci[RigidLanes], sumDerivative[RigidLanes], sumValue[RigidLanes];
     int j, l, n, mostTerms = 1;
     RIGID_LANE_LOOP
     for (l = 0; l < RigidLanes; l++) {
@@ -230,8 +230,8 @@ RIGID_HOT_FUNCTION void rigidThetaSeriesLanes(const RigidRotor* r, double u[2][R
     for (l = 0; l < RigidLanes; l++) {
         cr[l] = 2.0*oddPower[l]*coshK[l];
         ci[l] = -2.0*oddPower[l]*sinhK[l];
-        derivative[l] = 0.0 + cr[l];
-        value[l] = 0.0 - ci[l];
+        sumDerivative[l] = 0.0 + cr[l];
+        sumValue[l] = 0.0 - ci[l];
     }
     for (j = 0; j < 2; j++)
         RIGID_LANE_LOOP
@@ -251,7 +251,7 @@ RIGID_HOT_FUNCTION void rigidThetaSeriesLanes(const RigidRotor* r, double u[2][R
             im[j][l] = ci[l]*co[j][l];
         }
     for (n = 1; n < mostTerms; n++) {
-        const double sign = (n%2 == 0 ? 2.0 : -2.0);
+        const double sign = (n%2 == 0 ? 2.0 : -2.0), parity = (n%2 == 0 ? 1.0 : -1.0), weight = 2*n + 1, term = n;
         RIGID_LANE_LOOP
         for (l = 0; l < RigidLanes; l++) {
             double nextSinh, nextDerivative, nextValue;
@@ -264,17 +264,18 @@ RIGID_HOT_FUNCTION void rigidThetaSeriesLanes(const RigidRotor* r, double u[2][R
             sinhK[l] = nextSinh;
             cr[l] = sign*oddPower[l]*coshK[l];
             ci[l] = -sign*oddPower[l]*sinhK[l];
-            nextDerivative = derivative[l] + (2*n + 1)*cr[l];
-            nextValue = value[l] - ci[l];
-            derivative[l] = (n < terms[l] ? nextDerivative : derivative[l]);
-            value[l] = (n < terms[l] ? nextValue : value[l]);
+            nextDerivative = sumDerivative[l] + weight*cr[l];
+            nextValue = sumValue[l] - ci[l];
+            sumDerivative[l] = (term < terms[l] ? nextDerivative : sumDerivative[l]);
+            sumValue[l] = (term < terms[l] ? nextValue : sumValue[l]);
         }
         for (j = 0; j < 2; j++)
             RIGID_LANE_LOOP
             for (l = 0; l < RigidLanes; l++) {
-                const double signedOdd = (n%2 == 0 ? oddPower[l] : -oddPower[l]);
+                /* (-1)^n q^{n(n+1)} and (-1)^n 2 q^{n^2}: a product by +-1 is exact */
+                const double signedOdd = parity*oddPower[l];
                 const double even = 2.0*evenPower[l];
-                const double signedEven = (n%2 == 0 ? even : -even);
+                const double signedEven = parity*even;
                 const double nextOdd = so[j][l]*c2[j][l] + co[j][l]*s2[j][l];
                 const double nextCo = co[j][l]*c2[j][l] - so[j][l]*s2[j][l];
                 const double sum3 = theta3[j][l] + even*ce[j][l], sum4 = theta4[j][l] + signedEven*ce[j][l];
@@ -283,12 +284,12 @@ RIGID_HOT_FUNCTION void rigidThetaSeriesLanes(const RigidRotor* r, double u[2][R
                 double nextEven;
                 co[j][l] = nextCo;
                 so[j][l] = nextOdd;
-                theta3[j][l] = (n < terms[l] ? sum3 : theta3[j][l]);
-                theta4[j][l] = (n < terms[l] ? sum4 : theta4[j][l]);
-                re[j][l] = (n < terms[l] ? sumRe : re[j][l]);
-                im[j][l] = (n < terms[l] ? sumIm : im[j][l]);
-                theta1[j][l] = (n < terms[l] ? sum1 : theta1[j][l]);
-                theta2[j][l] = (n < terms[l] ? sum2 : theta2[j][l]);
+                theta3[j][l] = (term < terms[l] ? sum3 : theta3[j][l]);
+                theta4[j][l] = (term < terms[l] ? sum4 : theta4[j][l]);
+                re[j][l] = (term < terms[l] ? sumRe : re[j][l]);
+                im[j][l] = (term < terms[l] ? sumIm : im[j][l]);
+                theta1[j][l] = (term < terms[l] ? sum1 : theta1[j][l]);
+                theta2[j][l] = (term < terms[l] ? sum2 : theta2[j][l]);
                 nextEven = se[j][l]*c2[j][l] + ce[j][l]*s2[j][l];
                 ce[j][l] = ce[j][l]*c2[j][l] - se[j][l]*s2[j][l];
                 se[j][l] = nextEven;
@@ -303,6 +304,10 @@ RIGID_HOT_FUNCTION void rigidThetaSeriesLanes(const RigidRotor* r, double u[2][R
             values[j][l].re = re[j][l];
             values[j][l].im = im[j][l];
         }
+    for (l = 0; l < RigidLanes; l++) {
+        derivative[l] = sumDerivative[l];
+        value[l] = sumValue[l];
+    }
 }
 
 /**
