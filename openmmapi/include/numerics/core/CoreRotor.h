@@ -269,12 +269,13 @@ RIGID_HOT_FUNCTION void rigidThetaSeries(const RigidRotor* r, int count, const d
     }
 }
 
-/** T1'(omega) of vZS eq. (3.13) at u with the given sn, cn, dn: its columns are e1, e2 and L/|L| in the internal body frame. */
-RIGID_HOT_FUNCTION void rigidBodyToInvariantFrame(const RigidRotor* r, double sn, double cn, double dn, double t1[3][3]) {
-    /* L = (I1 w1m cn, I2 w2m sn, I3 w3m dn) (vZS eqs. (3.33)-(3.35)), in units of frequencyScale. */
-    const double l1 = r->internalMoments[0]*r->w1m*cn, l2 = r->internalMoments[1]*r->w2m*sn, l3 = r->internalMoments[2]*r->w3m*dn;
+/**
+ * T1'(omega) of vZS eq. (3.13) from L = (l1, l2, l3) in the internal body frame and |L|: its columns
+ * are e1, e2 and L/|L|.
+ */
+RIGID_HOT_FUNCTION void rigidInvariantFrame(double l1, double l2, double l3, double angularMomentum, double t1[3][3]) {
     const double perp = sqrt(l1*l1 + l2*l2);
-    const double inverseL = 1.0/r->angularMomentum, inversePerp = 1.0/perp, l3Ratio = l3*inverseL*inversePerp;
+    const double inverseL = 1.0/angularMomentum, inversePerp = 1.0/perp, l3Ratio = l3*inverseL*inversePerp;
     t1[0][0] = l1*l3Ratio;
     t1[0][1] = -l2*inversePerp;
     t1[0][2] = l1*inverseL;
@@ -286,42 +287,70 @@ RIGID_HOT_FUNCTION void rigidBodyToInvariantFrame(const RigidRotor* r, double sn
     t1[2][2] = l3*inverseL;
 }
 
+/** T1'(omega) of vZS eq. (3.13) at u with the given sn, cn, dn: its columns are e1, e2 and L/|L| in the internal body frame. */
+RIGID_HOT_FUNCTION void rigidBodyToInvariantFrame(const RigidRotor* r, double sn, double cn, double dn, double t1[3][3]) {
+    /* L = (I1 w1m cn, I2 w2m sn, I3 w3m dn) (vZS eqs. (3.33)-(3.35)), in units of frequencyScale. */
+    rigidInvariantFrame(r->internalMoments[0]*r->w1m*cn, r->internalMoments[1]*r->w2m*sn, r->internalMoments[2]*r->w3m*dn,
+                        r->angularMomentum, t1);
+}
+
 /**
- * The state of an asymmetric top once sn, cn, dn at u = wp t + eps and cos psi, sin psi are known:
- * omega from vZS eqs. (3.33)-(3.35), A = Q^T T1'(omega(t)) T2'(psi) B (notes, evolution step 3).
+ * The attitude in internal axes, T1' T2' B, from T1' (rigidInvariantFrame), cos and sin of psi and B
+ * (B row by row in b; notes, evolution step 3); rigidRotorCompose() takes it back to the given axes.
  */
-RIGID_FUNCTION void rigidRotorCompose(const RigidRotor* r, double sn, double cn, double dn, double cosPsi, double sinPsi,
-                                      double* omega, double attitude[3][3]) {
-    double t1[3][3], rotation[3][3], w[3];
-    int i, j, c;
-    w[0] = r->w1m*cn*r->frequencyScale;
-    w[1] = r->w2m*sn*r->frequencyScale;
-    w[2] = r->w3m*dn*r->frequencyScale;
-    rigidBodyToInvariantFrame(r, sn, cn, dn, t1);
+RIGID_HOT_FUNCTION void rigidComposeInternal(double t1[3][3], double cosPsi, double sinPsi, const double* b,
+                                             double internal[3][3]) {
+    double rotation[3][3];
+    int i, c;
     /* T1' T2' with T2' = [[cos, sin, 0], [-sin, cos, 0], [0, 0, 1]] (vZS eq. (3.14)). */
     for (i = 0; i < 3; i++) {
         rotation[i][0] = t1[i][0]*cosPsi - t1[i][1]*sinPsi;
         rotation[i][1] = t1[i][0]*sinPsi + t1[i][1]*cosPsi;
         rotation[i][2] = t1[i][2];
     }
-    /* A = Q^T (T1' T2' B), the product written out since B is the rotor's (const) */
+    for (i = 0; i < 3; i++)
+        for (c = 0; c < 3; c++)
+            internal[i][c] = rotation[i][0]*b[c] + rotation[i][1]*b[3 + c] + rotation[i][2]*b[6 + c];
+}
+
+/**
+ * The state of an asymmetric top once sn, cn, dn at u = wp t + eps and cos psi, sin psi are known:
+ * omega from vZS eqs. (3.33)-(3.35), A = Q^T T1'(omega(t)) T2'(psi) B (notes, evolution step 3).
+ */
+RIGID_FUNCTION void rigidRotorCompose(const RigidRotor* r, double sn, double cn, double dn, double cosPsi, double sinPsi,
+                                      double* omega, double attitude[3][3]) {
+    double t1[3][3], internal[3][3], w[3];
+    int j, c;
+    w[0] = r->w1m*cn*r->frequencyScale;
+    w[1] = r->w2m*sn*r->frequencyScale;
+    w[2] = r->w3m*dn*r->frequencyScale;
+    rigidBodyToInvariantFrame(r, sn, cn, dn, t1);
+    rigidComposeInternal(t1, cosPsi, sinPsi, &r->b[0][0], internal);
+    /* A = Q^T (T1' T2' B) */
     for (j = 0; j < 3; j++) {
         omega[r->axisOf[j]] = r->axisSign[j]*w[j];
         for (c = 0; c < 3; c++)
-            attitude[r->axisOf[j]][c] = r->axisSign[j]*(rotation[j][0]*r->b[0][c] + rotation[j][1]*r->b[1][c] +
-                                                        rotation[j][2]*r->b[2][c]);
+            attitude[r->axisOf[j]][c] = r->axisSign[j]*internal[j][c];
     }
+}
+
+/**
+ * cos and sin of the precession angle psi = A1 + A2 t - arg theta_1(u) (vZS eq. (4.3); notes,
+ * evolution step 2) from cos A1, sin A1, cos and sin of A2 t, and theta_1(u) = re + i im up to a
+ * positive factor: the angle sums done on cosines and sines.
+ */
+RIGID_HOT_FUNCTION void rigidPrecessionAngle(double cosPhase1, double sinPhase1, double c2, double s2, double re, double im,
+                                             double* cosPsi, double* sinPsi) {
+    const double size = sqrt(re*re + im*im);
+    const double c = cosPhase1*c2 - sinPhase1*s2, s = sinPhase1*c2 + cosPhase1*s2;  /* of A1 + A2 t */
+    *cosPsi = (c*re + s*im)/size;
+    *sinPsi = (s*re - c*im)/size;
 }
 
 /** cos and sin of the precession angle psi from theta_1 at the time t (in units of 1/frequencyScale; vZS eq. (4.3)). */
 RIGID_FUNCTION void rigidThetaPrecession(const RigidRotor* r, double t, const RigidThetaValues* value, double* cosPsi,
                                          double* sinPsi) {
-    /* psi = A1 + A2 t - arg theta_1(u) (vZS eq. (4.3); notes, evolution step 2), the angle sums done on
-     * cosines and sines. */
-    const double c2 = cos(r->phase2*t), s2 = sin(r->phase2*t), size = sqrt(value->re*value->re + value->im*value->im);
-    const double c = r->cosPhase1*c2 - r->sinPhase1*s2, s = r->sinPhase1*c2 + r->cosPhase1*s2;  /* of A1 + A2 t */
-    *cosPsi = (c*value->re + s*value->im)/size;
-    *sinPsi = (s*value->re - c*value->im)/size;
+    rigidPrecessionAngle(r->cosPhase1, r->sinPhase1, cos(r->phase2*t), sin(r->phase2*t), value->re, value->im, cosPsi, sinPsi);
 }
 
 /**
@@ -559,24 +588,34 @@ RIGID_HOT_FUNCTION void rigidThetaPhase(RigidRotor* r, const RigidJacobi* f0) {
 }
 
 /**
- * Theta-series coefficients, last part, from the series at u = eps (values, and the sums derivative
- * and value of rigidThetaSeries): A2, A1, and f0 becomes sn, cn, dn at eps.
+ * A2 and A1 of the theta-series representation (as cos A1 and sin A1) from the series at u = eps:
+ * the sums derivative and value of rigidThetaSeries, and theta_1(eps) = re + i im up to a positive factor.
  */
-RIGID_HOT_FUNCTION void rigidThetaFinish(RigidRotor* r, const RigidThetaValues* values, double derivative, double value,
-                                         RigidJacobi* f0) {
-    double size;
+RIGID_HOT_FUNCTION void rigidThetaAngles(double angularMomentum, double i1, double thetaScale, double wp, double derivative,
+                                         double value, double re, double im, double* phase2, double* cosPhase1,
+                                         double* sinPhase1) {
     /* A2 (vZS eq. (3.53), (4.8); notes, initialization step 8): L/I1 + (pi wp / 2K) times the bracket
      * [coth(x) - 2 sum q^{2n}/(1 - q^{2n}) (xi^n - xi^-n)], which is i theta_1'/theta_1 at i x
      * (DLMF 20.5.10). Written with the theta series itself it is sum (2n+1) cr / (-sum ci): the same
      * few terms instead of a Lambert series in q. */
-    r->phase2 = r->angularMomentum/r->internalMoments[0] + r->thetaScale*r->wp*derivative/value;
+    const double size = sqrt(re*re + im*im);
+    *phase2 = angularMomentum/i1 + thetaScale*wp*derivative/value;
+    /* A1 = arg theta_1(eps) (vZS eq. (4.5); notes, initialization step 10); only its cosine and sine are needed. */
+    *cosPhase1 = re/size;
+    *sinPhase1 = im/size;
+}
+
+/**
+ * Theta-series coefficients, last part, from the series at u = eps (values, and the sums derivative
+ * and value of rigidThetaSeries): A2, A1 (rigidThetaAngles), and f0 becomes sn, cn, dn at eps.
+ */
+RIGID_HOT_FUNCTION void rigidThetaFinish(RigidRotor* r, const RigidThetaValues* values, double derivative, double value,
+                                         RigidJacobi* f0) {
+    rigidThetaAngles(r->angularMomentum, r->internalMoments[0], r->thetaScale, r->wp, derivative, value, values->re,
+                     values->im, &r->phase2, &r->cosPhase1, &r->sinPhase1);
     f0->sn = values->sn;
     f0->cn = values->cn;
     f0->dn = values->dn;
-    /* A1 = arg theta_1(eps) (vZS eq. (4.5); notes, initialization step 10); only its cosine and sine are needed. */
-    size = sqrt(values->re*values->re + values->im*values->im);
-    r->cosPhase1 = values->re/size;
-    r->sinPhase1 = values->im/size;
 }
 
 /**

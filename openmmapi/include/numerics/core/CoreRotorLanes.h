@@ -196,11 +196,16 @@ RIGID_HOT_FUNCTION void rigidThetaPhaseLanes(RigidRotor* r, const RigidJacobi* f
     }
 }
 
+/** rigidThetaSeries()'s values at two arguments j = 0, 1 for each lane l, at [j][l]. */
+typedef struct {
+    double sn[2][RigidLanes], cn[2][RigidLanes], dn[2][RigidLanes], re[2][RigidLanes], im[2][RigidLanes];
+} RigidThetaLanes;
+
 /**
  * rigidThetaSeries() with two arguments per lane, u[0][l] and u[1][l], each lane with its own
  * coefficients and number of terms; the sums of a lane stop at its own last term.
  */
-RIGID_HOT_FUNCTION void rigidThetaSeriesLanes(const RigidRotor* r, double u[2][RigidLanes], RigidThetaValues values[2][RigidLanes],
+RIGID_HOT_FUNCTION void rigidThetaSeriesLanes(const RigidRotor* r, double u[2][RigidLanes], RigidThetaLanes* values,
                                               double* derivative, double* value) {
     double so[2][RigidLanes], co[2][RigidLanes], se[2][RigidLanes], ce[2][RigidLanes], s2[2][RigidLanes], c2[2][RigidLanes];
     double theta1[2][RigidLanes], theta2[2][RigidLanes], theta3[2][RigidLanes], theta4[2][RigidLanes];
@@ -208,6 +213,7 @@ RIGID_HOT_FUNCTION void rigidThetaSeriesLanes(const RigidRotor* r, double u[2][R
     double nome2[RigidLanes], oddPower[RigidLanes], oddStep[RigidLanes], evenPower[RigidLanes], evenStep[RigidLanes];
     double sinhK[RigidLanes], coshK[RigidLanes], sinh2X[RigidLanes], cosh2X[RigidLanes], terms[RigidLanes];
     double cr[RigidLanes], ci[RigidLanes], sumDerivative[RigidLanes], sumValue[RigidLanes];
+    double snScale[RigidLanes], cnScale[RigidLanes], dnScale[RigidLanes];
     int j, l, n, mostTerms = 1;
     RIGID_LANE_LOOP
     for (l = 0; l < RigidLanes; l++) {
@@ -225,6 +231,9 @@ RIGID_HOT_FUNCTION void rigidThetaSeriesLanes(const RigidRotor* r, double u[2][R
             mostTerms = r[l].thetaTerms;
         zeta[0][l] = r[l].thetaScale*u[0][l];
         zeta[1][l] = r[l].thetaScale*u[1][l];
+        snScale[l] = r[l].snScale;
+        cnScale[l] = r[l].cnScale;
+        dnScale[l] = r[l].dnScale;
     }
     RIGID_LANE_LOOP
     for (l = 0; l < RigidLanes; l++) {
@@ -298,15 +307,82 @@ RIGID_HOT_FUNCTION void rigidThetaSeriesLanes(const RigidRotor* r, double u[2][R
     for (j = 0; j < 2; j++)
         RIGID_LANE_LOOP
         for (l = 0; l < RigidLanes; l++) {
-            values[j][l].sn = r[l].snScale*theta1[j][l]/theta4[j][l];
-            values[j][l].cn = r[l].cnScale*theta2[j][l]/theta4[j][l];
-            values[j][l].dn = r[l].dnScale*theta3[j][l]/theta4[j][l];
-            values[j][l].re = re[j][l];
-            values[j][l].im = im[j][l];
+            values->sn[j][l] = snScale[l]*theta1[j][l]/theta4[j][l];
+            values->cn[j][l] = cnScale[l]*theta2[j][l]/theta4[j][l];
+            values->dn[j][l] = dnScale[l]*theta3[j][l]/theta4[j][l];
+            values->re[j][l] = re[j][l];
+            values->im[j][l] = im[j][l];
         }
     for (l = 0; l < RigidLanes; l++) {
         derivative[l] = sumDerivative[l];
         value[l] = sumValue[l];
+    }
+}
+
+/**
+ * The end of rigidRotorAdvance()'s theta-series path for every lane, from the series at eps (index 0
+ * of values, with its sums derivative and value) and at the time t (index 1): rigidThetaFinish(),
+ * rigidRotorAsymmetricFinish(), rigidThetaPrecession() and rigidRotorCompose(), through the same
+ * element functions (rigidThetaAngles, rigidInvariantFrame, rigidMultiplyTransposed,
+ * rigidPrecessionAngle, rigidComposeInternal). Writes omega and the attitude in internal axes, at [k][l]
+ * and [j][c][l]; the caller takes them to the given axes.
+ */
+RIGID_HOT_FUNCTION void rigidRotorFinishLanes(const RigidRotor* r, const RigidThetaLanes* values, const double* derivative,
+                                              const double* value, const double* scale, double t, double w[3][RigidLanes],
+                                              double internal[3][3][RigidLanes]) {
+    double i1w1m[RigidLanes], i2w2m[RigidLanes], i3w3m[RigidLanes], angularMomentum[RigidLanes], i1[RigidLanes];
+    double thetaScale[RigidLanes], wp[RigidLanes], w1m[RigidLanes], w2m[RigidLanes], w3m[RigidLanes];
+    double phase2[RigidLanes], cosPhase1[RigidLanes], sinPhase1[RigidLanes], angle[RigidLanes], c2[RigidLanes], s2[RigidLanes];
+    double qa[3][3][RigidLanes];
+    int l, j, c;
+    for (l = 0; l < RigidLanes; l++) {
+        /* the products that rigidBodyToInvariantFrame forms first */
+        i1w1m[l] = r[l].internalMoments[0]*r[l].w1m;
+        i2w2m[l] = r[l].internalMoments[1]*r[l].w2m;
+        i3w3m[l] = r[l].internalMoments[2]*r[l].w3m;
+        angularMomentum[l] = r[l].angularMomentum;
+        i1[l] = r[l].internalMoments[0];
+        thetaScale[l] = r[l].thetaScale;
+        wp[l] = r[l].wp;
+        w1m[l] = r[l].w1m;
+        w2m[l] = r[l].w2m;
+        w3m[l] = r[l].w3m;
+        /* Q A(0) (rigidRotorAsymmetricFinish) */
+        for (j = 0; j < 3; j++)
+            for (c = 0; c < 3; c++)
+                qa[j][c][l] = r[l].axisSign[j]*r[l].attitude0[r[l].axisOf[j]][c];
+    }
+    RIGID_LANE_LOOP
+    for (l = 0; l < RigidLanes; l++) {
+        rigidThetaAngles(angularMomentum[l], i1[l], thetaScale[l], wp[l], derivative[l], value[l], values->re[0][l],
+                         values->im[0][l], &phase2[l], &cosPhase1[l], &sinPhase1[l]);
+        angle[l] = phase2[l]*(t*scale[l]);
+    }
+    for (l = 0; l < RigidLanes; l++) {
+        c2[l] = cos(angle[l]);
+        s2[l] = sin(angle[l]);
+    }
+    RIGID_LANE_LOOP
+    for (l = 0; l < RigidLanes; l++) {
+        double t1[3][3], a[3][3], b[3][3], rotated[3][3], cosPsi, sinPsi;
+        for (j = 0; j < 3; j++)
+            for (c = 0; c < 3; c++)
+                a[j][c] = qa[j][c][l];
+        /* B = T1'(omega(0))^T Q A(0) */
+        rigidInvariantFrame(i1w1m[l]*values->cn[0][l], i2w2m[l]*values->sn[0][l], i3w3m[l]*values->dn[0][l],
+                            angularMomentum[l], t1);
+        rigidMultiplyTransposed(t1, a, b);
+        /* psi, then T1'(omega(t)) T2'(psi) B */
+        rigidPrecessionAngle(cosPhase1[l], sinPhase1[l], c2[l], s2[l], values->re[1][l], values->im[1][l], &cosPsi, &sinPsi);
+        rigidInvariantFrame(i1w1m[l]*values->cn[1][l], i2w2m[l]*values->sn[1][l], i3w3m[l]*values->dn[1][l],
+                            angularMomentum[l], t1);
+        rigidComposeInternal(t1, cosPsi, sinPsi, &b[0][0], rotated);
+        for (j = 0; j < 3; j++)
+            for (c = 0; c < 3; c++)
+                internal[j][c][l] = rotated[j][c];
+        w[0][l] = w1m[l]*values->cn[1][l]*scale[l];
+        w[1][l] = w2m[l]*values->sn[1][l]*scale[l];
+        w[2][l] = w3m[l]*values->dn[1][l]*scale[l];
     }
 }
 
@@ -316,12 +392,13 @@ RIGID_HOT_FUNCTION void rigidThetaSeriesLanes(const RigidRotor* r, double u[2][R
  * bit. Same contract; the status is always RigidStatusOk under it.
  */
 RIGID_HOT_FUNCTION int rigidRotorAdvanceLanes(int count, const RigidShape* shapes, double omega[][3], double attitude[][3][3],
-                                          double t) {
+                                              double t) {
     RigidRotor r[RigidLanes];
     RigidJacobi f0[RigidLanes];
-    RigidThetaValues values[2][RigidLanes];
+    RigidThetaLanes values;
     double scale[RigidLanes], u[2][RigidLanes], derivative[RigidLanes], value[RigidLanes];
-    int lane[RigidLanes], inLanes = 0, b, l;
+    double w[3][RigidLanes], internal[3][3][RigidLanes];
+    int lane[RigidLanes], inLanes = 0, b, l, j, c;
     if (count > RigidLanes)
         return RigidStatusUnknownRepresentation;
     /* the bodies that take the theta-series path go to the lanes, the others take the scalar path */
@@ -352,19 +429,20 @@ RIGID_HOT_FUNCTION int rigidRotorAdvanceLanes(int count, const RigidShape* shape
     rigidThetaPhaseLanes(r, f0);
     RIGID_LANE_LOOP
     for (l = 0; l < RigidLanes; l++) {
-        r[l].representation = RigidRepresentationThetaSeries;
         u[0][l] = r[l].epsilon;
         u[1][l] = r[l].wp*(t*scale[l]) + r[l].epsilon;
     }
-    rigidThetaSeriesLanes(r, u, values, derivative, value);
-    for (l = 0; l < inLanes; l++) {
-        double cosPsi, sinPsi;
-        rigidThetaFinish(&r[l], &values[0][l], derivative[l], value[l], &f0[l]);
-        rigidRotorAsymmetricFinish(&r[l], &f0[l], scale[l]);
-        rigidThetaPrecession(&r[l], t*r[l].frequencyScale, &values[1][l], &cosPsi, &sinPsi);
-        rigidRotorCompose(&r[l], values[1][l].sn, values[1][l].cn, values[1][l].dn, cosPsi, sinPsi, omega[lane[l]],
-                          attitude[lane[l]]);
-    }
+    rigidThetaSeriesLanes(r, u, &values, derivative, value);
+    rigidRotorFinishLanes(r, &values, derivative, value, scale, t, w, internal);
+    /* A = Q^T (T1' T2' B) and omega in the given axes (rigidRotorCompose) */
+    for (l = 0; l < inLanes; l++)
+        for (j = 0; j < 3; j++) {
+            const int axis = r[l].axisOf[j];
+            const double sign = r[l].axisSign[j];
+            omega[lane[l]][axis] = sign*w[j][l];
+            for (c = 0; c < 3; c++)
+                attitude[lane[l]][axis][c] = sign*internal[j][c][l];
+        }
     return RigidStatusOk;
 }
 
