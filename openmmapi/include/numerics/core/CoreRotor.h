@@ -444,44 +444,60 @@ RIGID_HOT_FUNCTION void rigidRotorOrderAxes(RigidRotor* r, const double* scaledO
     }
 }
 
+/** What rigidInvariantsOf() finds, in units of the frequency scale: |L|, the amplitudes, wp, m and 1 - m. */
+typedef struct {
+    double angularMomentum, w1m, w2m, w3m, wp, m, m1;
+} RigidInvariants;
+
 /**
  * Initialization, third part: the invariants and the parameter (notes, initialization steps 1 and 5;
- * vZS eqs. (3.36)-(3.41)) from the internal, scaled w0. Returns 0 when L lies along axis 3 to within
+ * vZS eqs. (3.36)-(3.41)) from the internal moments and the internal, scaled w0, into v. Returns 0 when L lies along axis 3 to within
  * the range of doubles: the precession amplitude is then below 1e-300 |omega|, and the uniform
  * rotation is exact to that level.
  */
-RIGID_HOT_FUNCTION int rigidRotorInvariants(RigidRotor* r, const double* w0) {
-    const double i1 = r->internalMoments[0], i2 = r->internalMoments[1], i3 = r->internalMoments[2];
+RIGID_HOT_FUNCTION int rigidInvariantsOf(const double* moments, const double* w0, RigidInvariants* v) {
+    const double i1 = moments[0], i2 = moments[1], i3 = moments[2];
     double l2MinusTwoEI1 = 0.0, l2MinusTwoEI2 = 0.0, l2MinusTwoEI3 = 0.0, l2 = 0.0;
     double sign1, sign3, numerator, denominator;
     int k;
     /* L^2 - 2E I_j = sum_k I_k w_k^2 (I_k - I_j) (notes: "Where the formulas are delicate"). */
     for (k = 0; k < 3; k++) {
-        const double weight = r->internalMoments[k]*w0[k]*w0[k];
-        l2MinusTwoEI1 += weight*(r->internalMoments[k] - i1);
-        l2MinusTwoEI3 += weight*(r->internalMoments[k] - i3);
-        l2 += weight*r->internalMoments[k];
+        const double weight = moments[k]*w0[k]*w0[k];
+        l2MinusTwoEI1 += weight*(moments[k] - i1);
+        l2MinusTwoEI3 += weight*(moments[k] - i3);
+        l2 += weight*moments[k];
     }
-    r->angularMomentum = sqrt(l2);
+    v->angularMomentum = sqrt(l2);
     /* sgn(0) is taken as +1; any fixed choice satisfies Euler's equations. */
     sign1 = (w0[0] < 0.0 ? -1.0 : 1.0);
     sign3 = (w0[2] < 0.0 ? -1.0 : 1.0);
-    r->w1m = sign1*sqrt(rigidPositivePart(l2MinusTwoEI3/(i1*(i1 - i3))));
-    r->w2m = -sign1*sqrt(rigidPositivePart(l2MinusTwoEI3/(i2*(i2 - i3))));
-    r->w3m = sign3*sqrt(rigidPositivePart(l2MinusTwoEI1/(i3*(i3 - i1))));
-    r->wp = (i2 > i3 ? 1.0 : -1.0)*sign3*sqrt(rigidPositivePart(l2MinusTwoEI1*(i3 - i2)/(i1*i2*i3)));
+    v->w1m = sign1*sqrt(rigidPositivePart(l2MinusTwoEI3/(i1*(i1 - i3))));
+    v->w2m = -sign1*sqrt(rigidPositivePart(l2MinusTwoEI3/(i2*(i2 - i3))));
+    v->w3m = sign3*sqrt(rigidPositivePart(l2MinusTwoEI1/(i3*(i3 - i1))));
+    v->wp = (i2 > i3 ? 1.0 : -1.0)*sign3*sqrt(rigidPositivePart(l2MinusTwoEI1*(i3 - i2)/(i1*i2*i3)));
     numerator = l2MinusTwoEI3*(i1 - i2);
     denominator = l2MinusTwoEI1*(i3 - i2);
-    r->m = rigidClamp(numerator/denominator, 0.0, 1.0);
+    v->m = rigidClamp(numerator/denominator, 0.0, 1.0);
     /* 1 - m = (L^2 - 2E I2)(I3 - I1) / ((L^2 - 2E I1)(I3 - I2)), again without cancellation. */
     for (k = 0; k < 3; k++)
-        l2MinusTwoEI2 += r->internalMoments[k]*w0[k]*w0[k]*(r->internalMoments[k] - i2);
-    r->m1 = rigidClamp(l2MinusTwoEI2*(i3 - i1)/denominator, 0.0, 1.0);
-    if (!(r->m > 0.0) || r->w1m == 0.0) {
-        r->m = 0.0;
+        l2MinusTwoEI2 += moments[k]*w0[k]*w0[k]*(moments[k] - i2);
+    v->m1 = rigidClamp(l2MinusTwoEI2*(i3 - i1)/denominator, 0.0, 1.0);
+    if (!(v->m > 0.0) || v->w1m == 0.0) {
+        v->m = 0.0;
         return 0;
     }
     return 1;
+}
+
+/** The invariants v, from rigidInvariantsOf(), into the rotor. */
+RIGID_HOT_FUNCTION void rigidRotorTakeInvariants(RigidRotor* r, const RigidInvariants* v) {
+    r->angularMomentum = v->angularMomentum;
+    r->w1m = v->w1m;
+    r->w2m = v->w2m;
+    r->w3m = v->w3m;
+    r->wp = v->wp;
+    r->m = v->m;
+    r->m1 = v->m1;
 }
 
 /**
@@ -490,10 +506,10 @@ RIGID_HOT_FUNCTION int rigidRotorInvariants(RigidRotor* r, const double* w0) {
  * eps keeps full precision near the turning points (the clamps absorb rounding beyond 1). Returns 0
  * when omega lies along the middle axis to within the range of doubles: the unstable steady rotation.
  */
-RIGID_HOT_FUNCTION int rigidRotorInitialArgument(const RigidRotor* r, const double* w0, RigidJacobi* f) {
-    f->sn = rigidClamp(w0[1]/r->w2m, -1.0, 1.0);
-    f->cn = rigidClamp(w0[0]/r->w1m, 0.0, 1.0);
-    f->dn = rigidClamp(w0[2]/r->w3m, 0.0, 1.0);
+RIGID_HOT_FUNCTION int rigidInitialArgumentOf(const RigidInvariants* v, const double* w0, RigidJacobi* f) {
+    f->sn = rigidClamp(w0[1]/v->w2m, -1.0, 1.0);
+    f->cn = rigidClamp(w0[0]/v->w1m, 0.0, 1.0);
+    f->dn = rigidClamp(w0[2]/v->w3m, 0.0, 1.0);
     return !(f->cn*f->cn == 0.0 && f->dn*f->dn == 0.0);
 }
 
@@ -670,13 +686,15 @@ RIGID_FUNCTION void rigidEllipticIntegralInitialize(RigidRotor* r, RigidJacobi* 
  */
 RIGID_HOT_FUNCTION int rigidRotorAsymmetricStart(RigidRotor* r, double* scale, RigidJacobi* f0) {
     double scaledOmega[3], w0[3];
+    RigidInvariants v;
+    int moving;
     *scale = rigidRotorScaleFrequency(r->omega0, scaledOmega);
     rigidRotorOrderAxes(r, scaledOmega, w0);
-    if (!rigidRotorInvariants(r, w0) || !rigidRotorInitialArgument(r, w0, f0)) {
+    moving = rigidInvariantsOf(r->internalMoments, w0, &v) && rigidInitialArgumentOf(&v, w0, f0);
+    rigidRotorTakeInvariants(r, &v);
+    if (!moving)
         r->steady = 1;
-        return 0;
-    }
-    return 1;
+    return moving;
 }
 
 /**

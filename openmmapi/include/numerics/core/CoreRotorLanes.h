@@ -387,43 +387,125 @@ RIGID_HOT_FUNCTION void rigidRotorFinishLanes(const RigidRotor* r, const RigidTh
 }
 
 /**
+ * The start of rigidRotorAdvance() for an asymmetric top in every lane: rigidRotorAsymmetricStart()'s
+ * invariants and initial argument (rigidInvariantsOf, rigidInitialArgumentOf) from the internal
+ * moments of r[l] and w0[k][l], the scaled omega in internal axes. moving[l] is 1 where both succeed
+ * (rigidRotorAsymmetricStart() would return 1), else 0.
+ */
+RIGID_HOT_FUNCTION void rigidRotorStartLanes(const RigidRotor* r, double w0[3][RigidLanes], RigidInvariants* v, RigidJacobi* f0,
+                                             double* moving) {
+    double moments[RigidLanes][3], w[RigidLanes][3], angularMomentum[RigidLanes], w1m[RigidLanes], w2m[RigidLanes], w3m[RigidLanes];
+    double wp[RigidLanes], m[RigidLanes], m1[RigidLanes], sn[RigidLanes], cn[RigidLanes], dn[RigidLanes];
+    int l, k;
+    for (l = 0; l < RigidLanes; l++)
+        for (k = 0; k < 3; k++) {
+            moments[l][k] = r[l].internalMoments[k];
+            w[l][k] = w0[k][l];
+        }
+    RIGID_LANE_LOOP
+    for (l = 0; l < RigidLanes; l++) {
+        RigidInvariants invariants;
+        RigidJacobi f;
+        int found, started;
+        /* both evaluated, so that the lanes run no branch; rigidInitialArgumentOf only divides */
+        found = rigidInvariantsOf(moments[l], w[l], &invariants);
+        started = rigidInitialArgumentOf(&invariants, w[l], &f);
+        moving[l] = (found & started ? 1.0 : 0.0);
+        angularMomentum[l] = invariants.angularMomentum;
+        w1m[l] = invariants.w1m;
+        w2m[l] = invariants.w2m;
+        w3m[l] = invariants.w3m;
+        wp[l] = invariants.wp;
+        m[l] = invariants.m;
+        m1[l] = invariants.m1;
+        sn[l] = f.sn;
+        cn[l] = f.cn;
+        dn[l] = f.dn;
+    }
+    for (l = 0; l < RigidLanes; l++) {
+        v[l].angularMomentum = angularMomentum[l];
+        v[l].w1m = w1m[l];
+        v[l].w2m = w2m[l];
+        v[l].w3m = w3m[l];
+        v[l].wp = wp[l];
+        v[l].m = m[l];
+        v[l].m1 = m1[l];
+        f0[l].sn = sn[l];
+        f0[l].cn = cn[l];
+        f0[l].dn = dn[l];
+    }
+}
+
+/**
  * rigidRotorAdvance() for count <= RigidLanes bodies: shapes[b], omega[b] and attitude[b] as that
- * function takes them, and the same time t for all. The results are rigidRotorAdvance()'s bit for
- * bit. Same contract; the status is always RigidStatusOk under it.
+ * function takes them, and the same time t for all. Body b runs in lane b if it is an asymmetric
+ * top on the theta-series path; every other body takes rigidRotorAdvance() itself, and its lane
+ * repeats a lane that runs, so that it computes nothing out of the ordinary. The results are
+ * rigidRotorAdvance()'s bit for bit. Same contract; the status is always RigidStatusOk under it.
  */
 RIGID_HOT_FUNCTION int rigidRotorAdvanceLanes(int count, const RigidShape* shapes, double omega[][3], double attitude[][3][3],
                                               double t) {
     RigidRotor r[RigidLanes];
     RigidJacobi f0[RigidLanes];
+    RigidInvariants invariants[RigidLanes];
     RigidThetaLanes values;
-    double scale[RigidLanes], u[2][RigidLanes], derivative[RigidLanes], value[RigidLanes];
-    double w[3][RigidLanes], internal[3][3][RigidLanes];
-    int lane[RigidLanes], inLanes = 0, b, l, j, c;
+    double scale[RigidLanes], u[2][RigidLanes], derivative[RigidLanes], value[RigidLanes], moving[RigidLanes];
+    double w0[3][RigidLanes], w[3][RigidLanes], internal[3][3][RigidLanes];
+    int candidate[RigidLanes], taken[RigidLanes], first = -1, b, l, j, c;
     if (count > RigidLanes)
         return RigidStatusUnknownRepresentation;
-    /* the bodies that take the theta-series path go to the lanes, the others take the scalar path */
+    /* rigidRotorSetUp, then rigidRotorAsymmetricStart's scaling and axis ordering, for each body */
     for (b = 0; b < count; b++) {
-        RigidRotor* rotor = &r[inLanes];
-        int taken = shapes[b].kind == RigidKindAsymmetric && rigidRotorSetUp(rotor, &shapes[b], omega[b], attitude[b]) &&
-                    rigidRotorAsymmetricStart(rotor, &scale[inLanes], &f0[inLanes]) &&
-                    rotor->m <= rigidAutomaticThetaSeriesLimit() && rotor->m1 != 0.0;
-        if (taken)
-            lane[inLanes++] = b;
+        candidate[b] = (shapes[b].kind == RigidKindAsymmetric && rigidRotorSetUp(&r[b], &shapes[b], omega[b], attitude[b]));
+        if (candidate[b]) {
+            double scaledOmega[3], ordered[3];
+            scale[b] = rigidRotorScaleFrequency(r[b].omega0, scaledOmega);
+            rigidRotorOrderAxes(&r[b], scaledOmega, ordered);
+            for (j = 0; j < 3; j++)
+                w0[j][b] = ordered[j];
+            if (first < 0)
+                first = b;
+        }
+    }
+    if (first < 0) {
+        for (b = 0; b < count; b++)
+            rigidRotorAdvance(&shapes[b], omega[b], attitude[b], t);
+        return RigidStatusOk;
+    }
+    for (l = 0; l < RigidLanes; l++)
+        if (l >= count || !candidate[l]) {
+            r[l] = r[first];
+            scale[l] = scale[first];
+            for (j = 0; j < 3; j++)
+                w0[j][l] = w0[j][first];
+        }
+    rigidRotorStartLanes(r, w0, invariants, f0, moving);
+    /* the bodies on the theta-series path stay in their lanes; the others take the scalar path */
+    first = -1;
+    for (b = 0; b < count; b++) {
+        taken[b] = (candidate[b] && moving[b] != 0.0 && invariants[b].m <= rigidAutomaticThetaSeriesLimit() &&
+                    invariants[b].m1 != 0.0);
+        if (taken[b]) {
+            rigidRotorTakeInvariants(&r[b], &invariants[b]);
+            if (first < 0)
+                first = b;
+        }
         else
             rigidRotorAdvance(&shapes[b], omega[b], attitude[b], t);
     }
-    if (inLanes == 0)
+    if (first < 0)
         return RigidStatusOk;
-    /* unused lanes repeat the first one, so that they compute nothing out of the ordinary */
-    for (l = inLanes; l < RigidLanes; l++) {
-        r[l] = r[0];
-        f0[l] = f0[0];
-        scale[l] = scale[0];
-    }
+    for (l = 0; l < RigidLanes; l++)
+        if (l >= count || !taken[l]) {
+            r[l] = r[first];
+            f0[l] = f0[first];
+            scale[l] = scale[first];
+        }
     if (!rigidThetaConstantsLanes(r)) {
         /* not reached for m <= rigidAutomaticThetaSeriesLimit(); the scalar path reports it */
-        for (l = 0; l < inLanes; l++)
-            rigidRotorAdvance(&shapes[lane[l]], omega[lane[l]], attitude[lane[l]], t);
+        for (b = 0; b < count; b++)
+            if (taken[b])
+                rigidRotorAdvance(&shapes[b], omega[b], attitude[b], t);
         return RigidStatusOk;
     }
     rigidThetaPhaseLanes(r, f0);
@@ -435,14 +517,15 @@ RIGID_HOT_FUNCTION int rigidRotorAdvanceLanes(int count, const RigidShape* shape
     rigidThetaSeriesLanes(r, u, &values, derivative, value);
     rigidRotorFinishLanes(r, &values, derivative, value, scale, t, w, internal);
     /* A = Q^T (T1' T2' B) and omega in the given axes (rigidRotorCompose) */
-    for (l = 0; l < inLanes; l++)
-        for (j = 0; j < 3; j++) {
-            const int axis = r[l].axisOf[j];
-            const double sign = r[l].axisSign[j];
-            omega[lane[l]][axis] = sign*w[j][l];
-            for (c = 0; c < 3; c++)
-                attitude[lane[l]][axis][c] = sign*internal[j][c][l];
-        }
+    for (b = 0; b < count; b++)
+        if (taken[b])
+            for (j = 0; j < 3; j++) {
+                const int axis = r[b].axisOf[j];
+                const double sign = r[b].axisSign[j];
+                omega[b][axis] = sign*w[j][b];
+                for (c = 0; c < 3; c++)
+                    attitude[b][axis][c] = sign*internal[j][c][b];
+            }
     return RigidStatusOk;
 }
 
