@@ -75,18 +75,11 @@ void RigidBodyDynamics::requireConstraints() const {
         throw OpenMMException(system.getClassName() + ": internal error: no solver for the constraints among free particles");
 }
 
-bool RigidBodyDynamics::FirstError::guard(const function<void()>& task) {
+void RigidBodyDynamics::FirstError::keep(const char* message) {
     // An exception must not escape a worker thread: the first one is kept and rethrown by rethrow().
-    try {
-        task();
-        return true;
-    }
-    catch (const exception& e) {
-        lock_guard<mutex> lock(errorLock);
-        if (error.empty())
-            error = e.what();
-        return false;
-    }
+    lock_guard<mutex> lock(errorLock);
+    if (error.empty())
+        error = message;
 }
 
 void RigidBodyDynamics::FirstError::rethrow() const {

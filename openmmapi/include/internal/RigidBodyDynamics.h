@@ -7,6 +7,7 @@
 #include "numerics/Matrix3.h"
 #include "openmm/Vec3.h"
 #include <cstdint>
+#include <exception>
 #include <functional>
 #include <mutex>
 #include <string>
@@ -231,11 +232,26 @@ private:
     /** The first exception thrown by any of several tasks, kept to be rethrown by one thread. */
     class FirstError {
     public:
-        /** Run task(); if it throws, keep the first such error. Returns whether task() completed. */
-        bool guard(const std::function<void()>& task);
+        /**
+         * Run task(); if it throws, keep the first such error. Returns whether task() completed. A
+         * template, not a std::function: it runs once per body and stage, and a std::function of a
+         * closure with many captures allocates.
+         */
+        template <class Task>
+        bool guard(Task&& task) {
+            try {
+                task();
+                return true;
+            }
+            catch (const std::exception& e) {
+                keep(e.what());
+                return false;
+            }
+        }
         /** Throw the kept error, if any, as an OpenMMException. */
         void rethrow() const;
     private:
+        void keep(const char* message);
         std::mutex errorLock;
         std::string error;
     };
