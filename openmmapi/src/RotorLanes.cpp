@@ -17,8 +17,8 @@
  * for AVX2 (four), chosen at load time by the processor (target_clones). Vector instructions round
  * each element as the scalar ones do, so either gives rigidRotorAdvance()'s results bit for bit
  * (TestFreeRotor checks it on the processor it runs on). On the Intel Xeon of 2026-12-04 the AVX2
- * version takes 243 ns per asymmetric body, the SSE2 one 288 and rigidRotorAdvance 329
- * (docs/results/free_rotor_cost.md).
+ * version took 201 ns per generic asymmetric body against 311 for rigidRotorAdvance
+ * (docs/results/free_rotor_cost.md, row "lanes").
  */
 #if defined(__GNUC__) || defined(__clang__)
 #define RIGID_LANE_LOOP _Pragma("omp simd")

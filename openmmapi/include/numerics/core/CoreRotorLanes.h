@@ -12,10 +12,12 @@
  *
  * What runs in lanes: the theta-series path of the automatic representation (an asymmetric top that
  * is not steady, with m <= rigidAutomaticThetaSeriesLimit()), which is every body of rigid water but
- * a few in a million. The stages that hold no long chain (the set-up, the axis ordering and the
- * invariants, B and the final composition) run per lane through the scalar core's own functions.
- * Every other body (another kind, a steady rotation, m above the limit) takes rigidRotorAdvance()
- * itself.
+ * a few in a million. The set-up and the axis ordering run body by body through the scalar core's
+ * functions; the invariants, the initial argument, A1 and A2, B and the composition run in loops over
+ * the lanes through the element functions the scalar path is built from (rigidInvariantsOf,
+ * rigidInitialArgumentOf, rigidThetaAngles, rigidInvariantFrame, rigidPrecessionAngle,
+ * rigidComposeInternal). Every other body (another kind, a steady rotation, m above the limit)
+ * takes rigidRotorAdvance() itself.
  *
  * The lane forms of rigidThetaConstants(), rigidThetaPhase() (with rigidCarlsonRFLockstep()) and
  * rigidThetaSeries() below carry out the same operations, in the same order, on each lane as the
@@ -31,7 +33,7 @@
 /** Bodies advanced side by side: four doubles fill an AVX2 register, two SSE2 registers. */
 enum { RigidLanes = 4 };
 
-/* A loop over the lanes; a host build that vectorizes them defines it (numerics/RigidCore.h). */
+/* A loop over the lanes; the translation unit that vectorizes them defines it (openmmapi/src/RotorLanes.cpp). */
 #ifndef RIGID_LANE_LOOP
 #define RIGID_LANE_LOOP
 #endif
@@ -389,50 +391,18 @@ RIGID_HOT_FUNCTION void rigidRotorFinishLanes(const RigidRotor* r, const RigidTh
 /**
  * The start of rigidRotorAdvance() for an asymmetric top in every lane: rigidRotorAsymmetricStart()'s
  * invariants and initial argument (rigidInvariantsOf, rigidInitialArgumentOf) from the internal
- * moments of r[l] and w0[k][l], the scaled omega in internal axes. moving[l] is 1 where both succeed
- * (rigidRotorAsymmetricStart() would return 1), else 0.
+ * moments of r[l] and w0[l], the scaled omega in internal axes, into v[l] and f0[l]. moving[l] is 1
+ * where both succeed (rigidRotorAsymmetricStart() would return 1), else 0.
  */
-RIGID_HOT_FUNCTION void rigidRotorStartLanes(const RigidRotor* r, double w0[3][RigidLanes], RigidInvariants* v, RigidJacobi* f0,
-                                             double* moving) {
-    double moments[RigidLanes][3], w[RigidLanes][3], angularMomentum[RigidLanes], w1m[RigidLanes], w2m[RigidLanes], w3m[RigidLanes];
-    double wp[RigidLanes], m[RigidLanes], m1[RigidLanes], sn[RigidLanes], cn[RigidLanes], dn[RigidLanes];
-    int l, k;
-    for (l = 0; l < RigidLanes; l++)
-        for (k = 0; k < 3; k++) {
-            moments[l][k] = r[l].internalMoments[k];
-            w[l][k] = w0[k][l];
-        }
+RIGID_HOT_FUNCTION void rigidRotorStartLanes(const RigidRotor* r, double w0[][3], RigidInvariants* v, RigidJacobi* f0,
+                                             int* moving) {
+    int l;
     RIGID_LANE_LOOP
     for (l = 0; l < RigidLanes; l++) {
-        RigidInvariants invariants;
-        RigidJacobi f;
-        int found, started;
         /* both evaluated, so that the lanes run no branch; rigidInitialArgumentOf only divides */
-        found = rigidInvariantsOf(moments[l], w[l], &invariants);
-        started = rigidInitialArgumentOf(&invariants, w[l], &f);
-        moving[l] = (found & started ? 1.0 : 0.0);
-        angularMomentum[l] = invariants.angularMomentum;
-        w1m[l] = invariants.w1m;
-        w2m[l] = invariants.w2m;
-        w3m[l] = invariants.w3m;
-        wp[l] = invariants.wp;
-        m[l] = invariants.m;
-        m1[l] = invariants.m1;
-        sn[l] = f.sn;
-        cn[l] = f.cn;
-        dn[l] = f.dn;
-    }
-    for (l = 0; l < RigidLanes; l++) {
-        v[l].angularMomentum = angularMomentum[l];
-        v[l].w1m = w1m[l];
-        v[l].w2m = w2m[l];
-        v[l].w3m = w3m[l];
-        v[l].wp = wp[l];
-        v[l].m = m[l];
-        v[l].m1 = m1[l];
-        f0[l].sn = sn[l];
-        f0[l].cn = cn[l];
-        f0[l].dn = dn[l];
+        const int found = rigidInvariantsOf(r[l].internalMoments, w0[l], &v[l]);
+        const int started = rigidInitialArgumentOf(&v[l], w0[l], &f0[l]);
+        moving[l] = found & started;
     }
 }
 
@@ -449,20 +419,18 @@ RIGID_HOT_FUNCTION int rigidRotorAdvanceLanes(int count, const RigidShape* shape
     RigidJacobi f0[RigidLanes];
     RigidInvariants invariants[RigidLanes];
     RigidThetaLanes values;
-    double scale[RigidLanes], u[2][RigidLanes], derivative[RigidLanes], value[RigidLanes], moving[RigidLanes];
-    double w0[3][RigidLanes], w[3][RigidLanes], internal[3][3][RigidLanes];
-    int candidate[RigidLanes], taken[RigidLanes], first = -1, b, l, j, c;
+    double scale[RigidLanes], u[2][RigidLanes], derivative[RigidLanes], value[RigidLanes];
+    double w0[RigidLanes][3], w[3][RigidLanes], internal[3][3][RigidLanes];
+    int candidate[RigidLanes], moving[RigidLanes], taken[RigidLanes], first = -1, b, l, j, c;
     if (count > RigidLanes)
         return RigidStatusUnknownRepresentation;
     /* rigidRotorSetUp, then rigidRotorAsymmetricStart's scaling and axis ordering, for each body */
     for (b = 0; b < count; b++) {
         candidate[b] = (shapes[b].kind == RigidKindAsymmetric && rigidRotorSetUp(&r[b], &shapes[b], omega[b], attitude[b]));
         if (candidate[b]) {
-            double scaledOmega[3], ordered[3];
+            double scaledOmega[3];
             scale[b] = rigidRotorScaleFrequency(r[b].omega0, scaledOmega);
-            rigidRotorOrderAxes(&r[b], scaledOmega, ordered);
-            for (j = 0; j < 3; j++)
-                w0[j][b] = ordered[j];
+            rigidRotorOrderAxes(&r[b], scaledOmega, w0[b]);
             if (first < 0)
                 first = b;
         }
@@ -477,13 +445,13 @@ RIGID_HOT_FUNCTION int rigidRotorAdvanceLanes(int count, const RigidShape* shape
             r[l] = r[first];
             scale[l] = scale[first];
             for (j = 0; j < 3; j++)
-                w0[j][l] = w0[j][first];
+                w0[l][j] = w0[first][j];
         }
     rigidRotorStartLanes(r, w0, invariants, f0, moving);
     /* the bodies on the theta-series path stay in their lanes; the others take the scalar path */
     first = -1;
     for (b = 0; b < count; b++) {
-        taken[b] = (candidate[b] && moving[b] != 0.0 && invariants[b].m <= rigidAutomaticThetaSeriesLimit() &&
+        taken[b] = (candidate[b] && moving[b] && invariants[b].m <= rigidAutomaticThetaSeriesLimit() &&
                     invariants[b].m1 != 0.0);
         if (taken[b]) {
             rigidRotorTakeInvariants(&r[b], &invariants[b]);
