@@ -5,6 +5,7 @@
 #include "numerics/SymmetricEigen.h"
 #include "openmm/OpenMMException.h"
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <mutex>
@@ -87,44 +88,100 @@ void RigidBodyDynamics::FirstError::rethrow() const {
         throw OpenMMException(error);
 }
 
-void RigidBodyDynamics::forEachBody(const function<void(int)>& task) {
+ThreadedLoopChoice::ThreadedLoopChoice() : runs(0), nextProbe(0), probeInterval(FirstProbeInterval), preferThreads(false) {
+    numSamples[0] = numSamples[1] = 0;
+    nextSlot[0] = nextSlot[1] = 0;
+}
+
+bool ThreadedLoopChoice::useThreads() const {
+    if (numSamples[0] == 0)
+        return false;
+    if (numSamples[1] == 0)
+        return true;
+    return (runs == nextProbe ? !preferThreads : preferThreads);
+}
+
+double ThreadedLoopChoice::median(bool threaded) const {
+    const int k = (threaded ? 1 : 0), n = numSamples[k];
+    double sorted[Window];
+    std::copy(samples[k], samples[k] + n, sorted);
+    std::sort(sorted, sorted + n);
+    return (n % 2 == 1 ? sorted[n/2] : 0.5*(sorted[n/2 - 1] + sorted[n/2]));
+}
+
+void ThreadedLoopChoice::record(bool threaded, double seconds) {
+    const int k = (threaded ? 1 : 0);
+    const bool bothKnown = (numSamples[0] > 0 && numSamples[1] > 0);
+    samples[k][nextSlot[k]] = seconds;
+    nextSlot[k] = (nextSlot[k] + 1) % Window;
+    numSamples[k] = min(numSamples[k] + 1, Window);
+    runs++;
+    if (!bothKnown) {
+        if (numSamples[0] > 0 && numSamples[1] > 0) {
+            preferThreads = (median(true) < median(false));
+            nextProbe = runs + probeInterval;
+        }
+        return;
+    }
+    if (threaded != preferThreads) {
+        // A probe: faster than the preferred way's recent runs, it becomes the preferred way.
+        if (seconds < median(preferThreads)) {
+            preferThreads = threaded;
+            probeInterval = FirstProbeInterval;
+        }
+        else
+            probeInterval = min(2*probeInterval, LastProbeInterval);
+        nextProbe = runs + probeInterval;
+    }
+}
+
+void RigidBodyDynamics::forEachBody(HostLoop loop, const function<void(int)>& task) {
     FirstError error;
-    forEachRange(states.size(), 64, [&](int, int begin, int end) {
+    forEachRange(loop, states.size(), [&](int, int begin, int end) {
         for (int b = begin; b < end; b++)
             error.guard([&]() { task(b); });
     });
     error.rethrow();
 }
 
-void RigidBodyDynamics::forEachBodyGroup(int size, const function<void(int begin, int end, FirstError& error)>& task) {
+void RigidBodyDynamics::forEachBodyGroup(HostLoop loop, int size, const function<void(int begin, int end, FirstError& error)>& task) {
     FirstError error;
-    forEachRange(states.size(), 64, [&](int, int begin, int end) {
+    forEachRange(loop, states.size(), [&](int, int begin, int end) {
         for (int first = begin; first < end; first += size)
             task(first, min(end, first + size), error);
     });
     error.rethrow();
 }
 
-void RigidBodyDynamics::forEachRange(int count, int minimum, const function<void(int thread, int begin, int end)>& task) const {
+// Below these counts a loop runs serially without asking its ThreadedLoopChoice: 64 bodies of the
+// cheapest stage take a few us, 4096 particles about 10 us to copy, less than waking any pool's
+// threads and waiting for them.
+static const int MinimumThreadedBodies = 64;
+static const int MinimumThreadedParticles = 4096;
+
+void RigidBodyDynamics::forEachRange(HostLoop loop, int count, const function<void(int thread, int begin, int end)>& task) const {
+    const int minimum = (loop == CopyLoop || loop == CompareLoop ? MinimumThreadedParticles : MinimumThreadedBodies);
     if (threads == NULL || threads->getNumThreads() < 2 || count < minimum) {
         task(0, 0, count);
         return;
     }
-    const int numThreads = threads->getNumThreads();
-    threads->execute([&](int thread) {
-        task(thread, (count*(long long) thread)/numThreads, (count*(long long) (thread + 1))/numThreads);
-    });
+    ThreadedLoopChoice& choice = loopChoices[loop];
+    const bool threaded = choice.useThreads();
+    const auto start = chrono::steady_clock::now();
+    if (threaded) {
+        const int numThreads = threads->getNumThreads();
+        threads->execute([&](int thread) {
+            task(thread, (count*(long long) thread)/numThreads, (count*(long long) (thread + 1))/numThreads);
+        });
+    }
+    else
+        task(0, 0, count);
+    choice.record(threaded, chrono::duration<double>(chrono::steady_clock::now() - start).count());
 }
-
-// Below this many particles a copy or a comparison is not worth waking the threads for. Waking the
-// CPU platform's threads and waiting for them (ThreadPool::execute and waitForThreads) took 75 to
-// 85 us on the 2-core Intel Xeon of 2026-12-04, against about 2.5 ns per particle for a serial copy:
-// the threads pay off only from some 60000 particles (a step does three such copies or comparisons).
-static const int ParallelArrayMinimum = 65536;
 
 void RigidBodyDynamics::copyParticleArray(const vector<Vec3>& from, vector<Vec3>& to) const {
     to.resize(from.size());
-    forEachRange(from.size(), ParallelArrayMinimum, [&](int, int begin, int end) {
+    forEachRange(CopyLoop, from.size(), [&](int, int begin, int end) {
         std::copy(from.begin() + begin, from.begin() + end, to.begin() + begin);
     });
 }
@@ -134,7 +191,7 @@ bool RigidBodyDynamics::particleArraysEqual(const vector<Vec3>& a, const vector<
         return false;
     const int maxThreads = (threads == NULL ? 1 : max(1, threads->getNumThreads()));
     vector<char> equal(maxThreads, 1);
-    forEachRange(a.size(), ParallelArrayMinimum, [&](int thread, int begin, int end) {
+    forEachRange(CompareLoop, a.size(), [&](int thread, int begin, int end) {
         equal[thread] = std::equal(a.begin() + begin, a.begin() + end, b.begin() + begin);
     });
     return std::find(equal.begin(), equal.end(), 0) == equal.end();
@@ -328,7 +385,7 @@ void RigidBodyDynamics::kickAndDrift(vector<Vec3>& positions, vector<Vec3>& velo
     // The bodies go in groups of RigidLanes: each is kicked and translated, then those that rotate
     // exactly turn together (rotateExactly), then the group's particles are placed. A body whose
     // kick or displacement check fails is left out of the rest of the step.
-    forEachBodyGroup(RigidLanes, [&](int begin, int end, FirstError& error) {
+    forEachBodyGroup(DriftLoop, RigidLanes, [&](int begin, int end, FirstError& error) {
         int exact[RigidLanes], numExact = 0;
         bool moved[RigidLanes];
         for (int b = begin; b < end; b++) {
@@ -442,7 +499,7 @@ void RigidBodyDynamics::thermalize(vector<Vec3>& positions, vector<Vec3>& veloci
     // The exact Ornstein-Uhlenbeck flow: the mean decays by c, and the variance goes from its
     // starting value s to c^2 s + (1 - c^2) m kT, so the canonical variance m kT stays fixed.
     const double noise = sqrt((1.0 - c*c)*kT);
-    forEachBody([&](int b) {
+    forEachBody(ThermalizeLoop, [&](int b) {
         BodyState& state = states[b];
         NormalStream normal(seed, b, step);
         const double velocityNoise = noise/sqrt(system.getBodyMass(b));
@@ -505,7 +562,7 @@ void RigidBodyDynamics::closingKick(vector<Vec3>& positions, vector<Vec3>& veloc
                                     double kick, double constraintTolerance) {
     requireConstraints();
     writtenVelocities.resize(velocities.size());
-    forEachBody([&](int b) {
+    forEachBody(ClosingKickLoop, [&](int b) {
         BodyState& state = states[b];
         Vec3 force, torque;
         if (kick != 0.0)
@@ -540,7 +597,7 @@ void RigidBodyDynamics::writeRigidVelocities(int b, const vector<Vec3>& position
 
 void RigidBodyDynamics::writeBodyVelocities(const vector<Vec3>& positions, vector<Vec3>& velocities) {
     writtenVelocities.resize(velocities.size());
-    forEachBody([&](int b) {
+    forEachBody(BodyVelocitiesLoop, [&](int b) {
         writeRigidVelocities(b, positions, velocities);
         recordWrittenVelocities(b, velocities);
     });

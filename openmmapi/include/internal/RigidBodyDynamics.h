@@ -29,6 +29,38 @@ public:
 };
 
 /**
+ * Whether one loop that a stage repeats (every step, on the same number of items) runs on the host
+ * threads or serially: whichever its own recent runs say is faster. Waking a pool's threads and
+ * waiting for them costs a round trip that depends on the machine (75 to 85 us for the CPU
+ * platform's pool on a 2-core virtual machine, a few us on a workstation) and on its load, so no
+ * fixed count of items decides it. The loop runs serially first, then once on the threads; after
+ * that it takes the faster by the median of the last `Window` runs of each, and every so often runs
+ * once the other way (a probe): a probe faster than that median switches, a slower one doubles the
+ * interval to the next probe (from `FirstProbeInterval` to `LastProbeInterval` runs), so that a
+ * losing probe costs a vanishing share of the time while a change of load is still noticed. Which way
+ * a loop runs must change no result: only loops whose items are independent use this.
+ */
+class OPENMM_EXPORT_RIGID ThreadedLoopChoice {
+public:
+    static const int Window = 3;
+    static const int FirstProbeInterval = 16;
+    static const int LastProbeInterval = 4096;
+    ThreadedLoopChoice();
+    /** Whether the next run should use the threads. */
+    bool useThreads() const;
+    /** Learn from a run that took `seconds`, on the threads or not (as useThreads() said). */
+    void record(bool threaded, double seconds);
+private:
+    /** The median of the last (at most Window) runs serially (threaded false) or on the threads. */
+    double median(bool threaded) const;
+    double samples[2][Window];
+    int numSamples[2], nextSlot[2];
+    long long runs, nextProbe;
+    int probeInterval;
+    bool preferThreads;
+};
+
+/**
  * The constraints among free particles, solved on host arrays: supplied by the platform (the
  * Reference platform's solver), since the step sequence only says when to apply them.
  */
@@ -255,18 +287,21 @@ private:
         std::mutex errorLock;
         std::string error;
     };
-    /** Run task(b) for every body, on the threads if there are any; the first exception is rethrown here. */
-    void forEachBody(const std::function<void(int)>& task);
+    /** The loops that may run on the threads, each with its own ThreadedLoopChoice. */
+    enum HostLoop {DriftLoop, ClosingKickLoop, ThermalizeLoop, BodyVelocitiesLoop, CopyLoop, CompareLoop, NumHostLoops};
+    /** Run task(b) for every body, on the threads where they pay; the first exception is rethrown here. */
+    void forEachBody(HostLoop loop, const std::function<void(int)>& task);
     /**
-     * Run task(begin, end, error) for consecutive groups of at most `size` bodies, on the threads if
-     * there are any; the task guards each body's work with `error`, whose first exception is rethrown here.
+     * Run task(begin, end, error) for consecutive groups of at most `size` bodies, on the threads where
+     * they pay; the task guards each body's work with `error`, whose first exception is rethrown here.
      */
-    void forEachBodyGroup(int size, const std::function<void(int begin, int end, FirstError& error)>& task);
+    void forEachBodyGroup(HostLoop loop, int size, const std::function<void(int begin, int end, FirstError& error)>& task);
     /**
-     * Split 0 ... count - 1 into one contiguous range per thread and run task(thread, begin, end) on
-     * each; serially, as one range, without threads or below `minimum` items.
+     * Run task(thread, begin, end) over 0 ... count - 1: split into one contiguous range per thread
+     * where the loop's ThreadedLoopChoice says the threads are faster, else serially as one range
+     * (always without threads, and below 64 bodies or 4096 particles).
      */
-    void forEachRange(int count, int minimum, const std::function<void(int thread, int begin, int end)>& task) const;
+    void forEachRange(HostLoop loop, int count, const std::function<void(int thread, int begin, int end)>& task) const;
     /** Record body b's particle velocities as those this class wrote or read (writtenVelocities; only body particles' are read). */
     void recordWrittenVelocities(int b, const std::vector<OpenMM::Vec3>& velocities);
     /** Take body b's momenta from its particles if their velocities are not the ones this class wrote. */
@@ -293,6 +328,7 @@ private:
     Vector3 bodyAngularVelocity(int b, const Vector3& bodyAngularMomentum) const;
     RigidBodySystem& system;
     HostThreads* threads;
+    mutable ThreadedLoopChoice loopChoices[NumHostLoops];
     HostConstraints* constraints;
     StepGeometry geometry;
     std::vector<BodyState> states;
