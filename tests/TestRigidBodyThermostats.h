@@ -295,7 +295,8 @@ void testFrictionZero(Platform& platform) {
  * What a stochastic integrator's seed must do. runFor(scene, seed, properties, steps) starts one on the
  * scene with that seed and returns the positions after the steps: the same seed gives the same
  * positions, seeds 5 and 6 give positions more than `apart` nm apart, and so do two Contexts with
- * seed 0 (each picks its own). On CPU, over 80 bodies the per-body work runs on the thread pool: the
+ * seed 0 (each picks its own). On CPU, from 64 bodies each per-body loop runs on the thread pool at its
+ * second run and after that wherever the pool is faster (ThreadedLoopChoice): the
  * trajectory must not depend on the number of threads (no forces, so that only this plugin's
  * arithmetic is compared).
  */
