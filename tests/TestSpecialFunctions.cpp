@@ -369,6 +369,78 @@ void testDomainErrors() {
     assertThrowsInvalidArgument([&]() {carlsonRJ(1.0, 1.0, 1.0, -1.0);}, "carlsonRJ(p = -1)", __LINE__);
 }
 
+/** |computed - exact| in units of the spacing of doubles at the exact value (its ulp). */
+double ulpsOff(double computed, long double exact) {
+    const double rounded = (double) fabsl(exact);
+    const double ulp = (rounded == 0.0 ? std::numeric_limits<double>::denorm_min() :
+                        std::nextafter(rounded, std::numeric_limits<double>::infinity()) - rounded);
+    return (double) (fabsl((long double) computed - exact)/ulp);
+}
+
+/**
+ * rigidSinCos, the rotor's sine and cosine, against long double sinl and cosl (64-bit significands):
+ * within 1 ulp on random arguments of every size up to the limit of its own reduction, next to the
+ * multiples of pi/2 (where the reduction cancels), at the quadrant boundaries; beyond the limit, and
+ * for infinities and NaN, the library's values exactly; signed zeros and subnormals kept.
+ */
+void testSinCos() {
+    std::vector<double> arguments;
+    unsigned long long state = 88172645463325252ULL;
+    auto uniform = [&state]() {  // xorshift64, in [0, 1)
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        return (state >> 11)*(1.0/9007199254740992.0);
+    };
+    for (int i = 0; i < 400000; i++)
+        arguments.push_back((2.0*uniform() - 1.0)*M_PI/4);
+    for (int i = 0; i < 400000; i++)  // magnitudes 1e-8 to 1e5, both signs
+        arguments.push_back((uniform() < 0.5 ? -1.0 : 1.0)*std::pow(10.0, -8.0 + 13.0*uniform()));
+    for (int k = -63000; k <= 63000; k += 7) {
+        const double nearest = (double) (k*(M_PIl/2));  // the double nearest k pi/2, and its neighbours
+        arguments.push_back(nearest);
+        arguments.push_back(std::nextafter(nearest, 1e6));
+        arguments.push_back(std::nextafter(nearest, -1e6));
+        const double boundary = (double) ((k + 0.5L)*(M_PIl/2));  // where the quadrant changes
+        arguments.push_back(boundary);
+        arguments.push_back(std::nextafter(boundary, 1e6));
+    }
+    arguments.push_back(RIGID_SIN_COS_LIMIT);
+    arguments.push_back(-RIGID_SIN_COS_LIMIT);
+    arguments.push_back(1e-310);
+    arguments.push_back(-5e-324);
+    double worst = 0.0, worstArgument = 0.0;
+    for (double x : arguments) {
+        double s, c;
+        OpenMMRigid::rigidSinCos(x, &s, &c);
+        const double off = std::max(ulpsOff(s, sinl((long double) x)), ulpsOff(c, cosl((long double) x)));
+        if (off > worst) {
+            worst = off;
+            worstArgument = x;
+        }
+    }
+    if (!(worst <= 1.0))
+        throw std::runtime_error("rigidSinCos is " + std::to_string(worst) + " ulps off at x = " + std::to_string(worstArgument));
+    std::cout << "rigidSinCos: largest error " << worst << " ulps over " << arguments.size() << " arguments" << std::endl;
+    // Beyond the limit, infinities and NaN: the library's sin and cos.
+    const double inf = std::numeric_limits<double>::infinity();
+    for (double x : {std::nextafter(RIGID_SIN_COS_LIMIT, inf), -2e5, 1e22, -3.5e300, inf, -inf}) {
+        double s, c;
+        OpenMMRigid::rigidSinCos(x, &s, &c);
+        const double libS = std::sin(x), libC = std::cos(x);
+        ASSERT((s == libS && c == libC) || (std::isnan(libS) && std::isnan(s) && std::isnan(c)));
+    }
+    double s, c;
+    OpenMMRigid::rigidSinCos(std::numeric_limits<double>::quiet_NaN(), &s, &c);
+    ASSERT(std::isnan(s) && std::isnan(c));
+    OpenMMRigid::rigidSinCos(-0.0, &s, &c);
+    ASSERT(s == 0.0 && std::signbit(s) && c == 1.0);
+    OpenMMRigid::rigidSinCos(0.0, &s, &c);
+    ASSERT(s == 0.0 && !std::signbit(s) && c == 1.0);
+    OpenMMRigid::rigidSinCos(-5e-324, &s, &c);
+    ASSERT(s == -5e-324 && c == 1.0);
+}
+
 int main() {
     try {
         testPythagoreanIdentities();
@@ -382,6 +454,7 @@ int main() {
         testLegendreRelation();
         testThirdKindSpecialCases();
         testDomainErrors();
+        testSinCos();
     }
     catch (const std::exception& e) {
         std::cout << "exception: " << e.what() << std::endl;

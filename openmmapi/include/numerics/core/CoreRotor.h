@@ -215,8 +215,7 @@ RIGID_HOT_FUNCTION void rigidThetaSeries(const RigidRotor* r, int count, const d
     *value = 0.0 - ci;
     for (j = 0; j < count; j++) {
         const double zeta = r->thetaScale*u[j];
-        so[j] = sin(zeta);
-        co[j] = cos(zeta);
+        rigidSinCos(zeta, &so[j], &co[j]);
         s2[j] = se[j] = 2.0*so[j]*co[j];
         c2[j] = ce[j] = (co[j] - so[j])*(co[j] + so[j]);
         theta1[j] = oddPower*so[j];
@@ -350,7 +349,9 @@ RIGID_HOT_FUNCTION void rigidPrecessionAngle(double cosPhase1, double sinPhase1,
 /** cos and sin of the precession angle psi from theta_1 at the time t (in units of 1/frequencyScale; vZS eq. (4.3)). */
 RIGID_FUNCTION void rigidThetaPrecession(const RigidRotor* r, double t, const RigidThetaValues* value, double* cosPsi,
                                          double* sinPsi) {
-    rigidPrecessionAngle(r->cosPhase1, r->sinPhase1, cos(r->phase2*t), sin(r->phase2*t), value->re, value->im, cosPsi, sinPsi);
+    double c2, s2;
+    rigidSinCos(r->phase2*t, &s2, &c2);
+    rigidPrecessionAngle(r->cosPhase1, r->sinPhase1, c2, s2, value->re, value->im, cosPsi, sinPsi);
 }
 
 /**
@@ -848,12 +849,13 @@ RIGID_FUNCTION void rigidRotorEvolve(const RigidRotor* r, double t, double* omeg
         }
         else {
             RigidJacobi f;
-            double psi;
+            double psi, sinPsi, cosPsi;
             rigidJacobiElliptic(u, r->m, r->m1, &f);
             /* psi = (L/I3) t + P (Pi(u) - Pi(eps)) with Pi(u) = u + excess(u) and P wp = L (I3 - I1)/(I1 I3). */
             psi = r->angularMomentum/r->internalMoments[0]*scaledTime +
                   r->integralPrefactor*(rigidPrecessionAngleExcess(r, u, &f) - r->integralAtStart);
-            rigidRotorCompose(r, f.sn, f.cn, f.dn, cos(psi), sin(psi), omega, attitude);
+            rigidSinCos(psi, &sinPsi, &cosPsi);
+            rigidRotorCompose(r, f.sn, f.cn, f.dn, cosPsi, sinPsi, omega, attitude);
         }
     }
 }

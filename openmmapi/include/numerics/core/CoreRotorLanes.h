@@ -244,12 +244,15 @@ RIGID_HOT_FUNCTION void rigidThetaSeriesLanes(const RigidRotor* r, double u[2][R
         sumDerivative[l] = 0.0 + cr[l];
         sumValue[l] = 0.0 - ci[l];
     }
+    /* rigidSinCos: the branch-free part in the vector loop, the rare argument beyond its range after it */
     for (j = 0; j < 2; j++)
         RIGID_LANE_LOOP
-        for (l = 0; l < RigidLanes; l++) {
-            so[j][l] = sin(zeta[j][l]);
-            co[j][l] = cos(zeta[j][l]);
-        }
+        for (l = 0; l < RigidLanes; l++)
+            rigidSinCosReduced(zeta[j][l], &so[j][l], &co[j][l]);
+    for (j = 0; j < 2; j++)
+        for (l = 0; l < RigidLanes; l++)
+            if (!(fabs(zeta[j][l]) <= RIGID_SIN_COS_LIMIT))
+                rigidSinCos(zeta[j][l], &so[j][l], &co[j][l]);
     for (j = 0; j < 2; j++)
         RIGID_LANE_LOOP
         for (l = 0; l < RigidLanes; l++) {
@@ -360,10 +363,12 @@ RIGID_HOT_FUNCTION void rigidRotorFinishLanes(const RigidRotor* r, const RigidTh
                          values->im[0][l], &phase2[l], &cosPhase1[l], &sinPhase1[l]);
         angle[l] = phase2[l]*(t*scale[l]);
     }
-    for (l = 0; l < RigidLanes; l++) {
-        c2[l] = cos(angle[l]);
-        s2[l] = sin(angle[l]);
-    }
+    RIGID_LANE_LOOP
+    for (l = 0; l < RigidLanes; l++)
+        rigidSinCosReduced(angle[l], &s2[l], &c2[l]);
+    for (l = 0; l < RigidLanes; l++)
+        if (!(fabs(angle[l]) <= RIGID_SIN_COS_LIMIT))
+            rigidSinCos(angle[l], &s2[l], &c2[l]);
     RIGID_LANE_LOOP
     for (l = 0; l < RigidLanes; l++) {
         double t1[3][3], a[3][3], b[3][3], rotated[3][3], cosPsi, sinPsi;
