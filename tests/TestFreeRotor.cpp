@@ -1094,6 +1094,41 @@ void testRotorsInLanes() {
         }
 }
 
+/**
+ * The host drift's correction of the attitudes after the exact rotation (reorthonormalizeAttitudes,
+ * compiled as advanceFreeRotors is) must be rigidReorthonormalize() bit for bit, for 1 to RigidLanes
+ * attitudes at once, and must do its job: attitudes off a rotation by 1e-12 to 1e-6 come out with
+ * |A A^T - 1| of the order of the square of that, or rounding.
+ */
+void testReorthonormalizeAttitudes() {
+    for (int trial = 0; trial < 400; trial++) {
+        const int count = 1 + trial%RigidLanes;
+        double attitude[RigidLanes][3][3], expected[RigidLanes][3][3];
+        for (int lane = 0; lane < count; lane++) {
+            const Matrix3 rotation = RigidBodyTestSupport::randomRotation(normal);
+            const double size = std::pow(10.0, -12.0 + 6.0*(trial%13)/12.0);
+            for (int i = 0; i < 3; i++)
+                for (int j = 0; j < 3; j++)
+                    attitude[lane][i][j] = expected[lane][i][j] = rotation[i][j] + size*normal();
+            rigidReorthonormalize(expected[lane]);
+        }
+        reorthonormalizeAttitudes(count, attitude);
+        for (int lane = 0; lane < count; lane++) {
+            if (!sameBits(&expected[lane][0][0], &attitude[lane][0][0], 9))
+                throw std::runtime_error("reorthonormalizeAttitudes differs from rigidReorthonormalize in lane " + std::to_string(lane));
+            double worst = 0.0;
+            for (int i = 0; i < 3; i++)
+                for (int j = 0; j < 3; j++) {
+                    const double dot = attitude[lane][i][0]*attitude[lane][j][0] + attitude[lane][i][1]*attitude[lane][j][1] +
+                                       attitude[lane][i][2]*attitude[lane][j][2];
+                    worst = std::max(worst, std::fabs(dot - (i == j ? 1.0 : 0.0)));
+                }
+            const double size = std::pow(10.0, -12.0 + 6.0*(trial%13)/12.0);
+            ASSERT(worst < 1e-15 + 100.0*size*size);
+        }
+    }
+}
+
 int main() {
     try {
         testPaperExample();
@@ -1114,6 +1149,7 @@ int main() {
         testClassification();
         testCoreAdvance();
         testRotorsInLanes();
+        testReorthonormalizeAttitudes();
     }
     catch (const std::exception& e) {
         std::cout << "exception: " << e.what() << std::endl;

@@ -290,7 +290,7 @@ void RigidBodyDynamics::rotateNoSquish(int b, double dt) {
         for (int j = 0; j < 3; j++)
             attitude[i][j] = state.attitude[i][j];
     rigidNoSquishRotate(system.getShape(b).moments, dt, attitude, bodyMomentum.data());
-    rigidReorthonormalize(attitude);
+    reorthonormalizeAttitudes(1, &attitude);
     for (int i = 0; i < 3; i++)
         for (int j = 0; j < 3; j++)
             state.attitude[i][j] = attitude[i][j];
@@ -314,9 +314,9 @@ void RigidBodyDynamics::rotateExactly(int count, const int* bodies, double dt) {
         }
     }
     advanceFreeRotors(count, shapes, omega, attitude, dt);
+    reorthonormalizeAttitudes(count, attitude);
     for (int lane = 0; lane < count; lane++) {
         BodyState& state = states[bodies[lane]];
-        rigidReorthonormalize(attitude[lane]);
         for (int i = 0; i < 3; i++)
             for (int j = 0; j < 3; j++)
                 state.attitude[i][j] = attitude[lane][i][j];

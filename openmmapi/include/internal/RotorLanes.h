@@ -16,6 +16,12 @@ namespace OpenMMRigid {
 OPENMM_EXPORT_RIGID void advanceFreeRotors(int count, const RigidShape* shapes, double omega[][3], double attitude[][3][3],
                                            double t);
 
+/**
+ * rigidReorthonormalize() on count attitudes, compiled as advanceFreeRotors() is (so the products
+ * are inlined and vectorized); the results are rigidReorthonormalize()'s bit for bit.
+ */
+OPENMM_EXPORT_RIGID void reorthonormalizeAttitudes(int count, double attitude[][3][3]);
+
 } // namespace OpenMMRigid
 
 #endif // OPENMMRIGID_ROTOR_LANES_H_
