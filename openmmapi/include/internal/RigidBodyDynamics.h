@@ -33,12 +33,13 @@ public:
  * threads or serially: whichever its own recent runs say is faster. Waking a pool's threads and
  * waiting for them costs a round trip that depends on the machine (75 to 85 us for the CPU
  * platform's pool on the 2-core virtual machine of 2026-12-04) and on its load (another program on a
- * core can make the threads slower than one), so no fixed count of items decides it. The loop runs serially first, then once on the threads; after
- * that it takes the faster by the median of the last `Window` runs of each, and every so often runs
- * once the other way (a probe): a probe faster than that median switches, a slower one doubles the
- * interval to the next probe (from `FirstProbeInterval` to `LastProbeInterval` runs), so that a
- * losing probe costs a vanishing share of the time while a change of load is still noticed. Which way
- * a loop runs must change no result: only loops whose items are independent use this.
+ * core can make the threads slower than one), so no fixed count of items decides it. The loop runs
+ * serially first, then once on the threads; after that it takes the faster by the median of the
+ * last `Window` runs of each, and every so often runs once the other way (a probe): a probe faster
+ * than that median switches, a slower one doubles the interval to the next probe (from
+ * `FirstProbeInterval` to `LastProbeInterval` runs), so that a losing probe costs a vanishing share
+ * of the time while a change of load is still noticed. Which way a loop runs must change no result:
+ * only loops whose items are independent use this.
  */
 class OPENMM_EXPORT_RIGID ThreadedLoopChoice {
 public:

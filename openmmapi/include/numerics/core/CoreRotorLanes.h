@@ -198,6 +198,20 @@ RIGID_HOT_FUNCTION void rigidThetaPhaseLanes(RigidRotor* r, const RigidJacobi* f
     }
 }
 
+/**
+ * rigidSinCos() of x[l] into s[l] and c[l] for every lane: the branch-free rigidSinCosReduced() in a
+ * loop over the lanes, which vectorizes, then rigidSinCos() itself for the rare lane beyond its range.
+ */
+RIGID_HOT_FUNCTION void rigidSinCosLanes(const double* x, double* s, double* c) {
+    int l;
+    RIGID_LANE_LOOP
+    for (l = 0; l < RigidLanes; l++)
+        rigidSinCosReduced(x[l], &s[l], &c[l]);
+    for (l = 0; l < RigidLanes; l++)
+        if (!(fabs(x[l]) <= RIGID_SIN_COS_LIMIT))
+            rigidSinCos(x[l], &s[l], &c[l]);
+}
+
 /** rigidThetaSeries()'s values at two arguments j = 0, 1 for each lane l, at [j][l]. */
 typedef struct {
     double sn[2][RigidLanes], cn[2][RigidLanes], dn[2][RigidLanes], re[2][RigidLanes], im[2][RigidLanes];
@@ -244,15 +258,8 @@ RIGID_HOT_FUNCTION void rigidThetaSeriesLanes(const RigidRotor* r, double u[2][R
         sumDerivative[l] = 0.0 + cr[l];
         sumValue[l] = 0.0 - ci[l];
     }
-    /* rigidSinCos: the branch-free part in the vector loop, the rare argument beyond its range after it */
     for (j = 0; j < 2; j++)
-        RIGID_LANE_LOOP
-        for (l = 0; l < RigidLanes; l++)
-            rigidSinCosReduced(zeta[j][l], &so[j][l], &co[j][l]);
-    for (j = 0; j < 2; j++)
-        for (l = 0; l < RigidLanes; l++)
-            if (!(fabs(zeta[j][l]) <= RIGID_SIN_COS_LIMIT))
-                rigidSinCos(zeta[j][l], &so[j][l], &co[j][l]);
+        rigidSinCosLanes(zeta[j], so[j], co[j]);
     for (j = 0; j < 2; j++)
         RIGID_LANE_LOOP
         for (l = 0; l < RigidLanes; l++) {
@@ -363,12 +370,7 @@ RIGID_HOT_FUNCTION void rigidRotorFinishLanes(const RigidRotor* r, const RigidTh
                          values->im[0][l], &phase2[l], &cosPhase1[l], &sinPhase1[l]);
         angle[l] = phase2[l]*(t*scale[l]);
     }
-    RIGID_LANE_LOOP
-    for (l = 0; l < RigidLanes; l++)
-        rigidSinCosReduced(angle[l], &s2[l], &c2[l]);
-    for (l = 0; l < RigidLanes; l++)
-        if (!(fabs(angle[l]) <= RIGID_SIN_COS_LIMIT))
-            rigidSinCos(angle[l], &s2[l], &c2[l]);
+    rigidSinCosLanes(angle, s2, c2);
     RIGID_LANE_LOOP
     for (l = 0; l < RigidLanes; l++) {
         double t1[3][3], a[3][3], b[3][3], rotated[3][3], cosPsi, sinPsi;
