@@ -133,6 +133,15 @@ public:
      */
     virtual void beforeLastForces(OpenMM::ContextImpl& context) {
     }
+    /**
+     * Before a force evaluation in a periodic box other than the last evaluation's (the box set
+     * between steps without new positions, a checkpoint, a barostat): a platform that keeps what it
+     * built for the old box, and would reuse it as long as the particles stay where they were,
+     * drops it here. The common-compute platforms rebuild their neighbour lists at the next
+     * evaluation; the Reference and CPU platforms build theirs at every evaluation, and do nothing.
+     */
+    virtual void boxChanged(OpenMM::ContextImpl& context) {
+    }
     /** After the last stage: advance the context's time and step count by dt, and record the positions written. */
     virtual void finishStep(OpenMM::ContextImpl& context, double dt) = 0;
 };

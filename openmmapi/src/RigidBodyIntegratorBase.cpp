@@ -530,10 +530,13 @@ bool RigidBodyIntegratorBase::makeBodiesCurrent(Vec3* box) {
         forcesAreValid = false;
         applyLoadedVelocityKick();
     }
-    // A new box (setPeriodicBoxVectors() between steps, without new positions) sends no notice.
+    // A new box (setPeriodicBoxVectors() between steps, without new positions) sends no notice; the
+    // platform is told, since the particles may not have moved (boxChanged()).
     context->getPeriodicBoxVectors(box[0], box[1], box[2]);
-    if (box[0] != forcesBox[0] || box[1] != forcesBox[1] || box[2] != forcesBox[2])
+    if (box[0] != forcesBox[0] || box[1] != forcesBox[1] || box[2] != forcesBox[2]) {
         forcesAreValid = false;
+        getKernel().boxChanged(*context);
+    }
     // A getState() of other force groups overwrites the forces.
     if (context->getLastForceGroups() != getIntegrationForceGroups())
         forcesAreValid = false;

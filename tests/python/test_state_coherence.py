@@ -234,6 +234,94 @@ def test_box_change_between_steps(water, integratorClass, platformName):
     assert max_difference(positions_of(context), positions_of(answer)) < tolerance(platformName, 1e-12, 1e-7)
 
 
+def two_slabs_across_the_boundary():
+    """(System, positions, velocities): two slabs of 32 particles each (one atom block of the GPU
+    platforms each: different parameters, so reordering never mixes them) that face each other across
+    the x boundary 0.85 nm apart, beyond the 0.7 nm cutoff and its padding, and a rigid water between
+    them. Reaction-field electrostatics, so that a pair of the two slabs taken or missed shows."""
+    edge = (3.0, 1.6, 1.6)
+    system = openmm.System()
+    system.setDefaultPeriodicBoxVectors(openmm.Vec3(edge[0], 0, 0), openmm.Vec3(0, edge[1], 0), openmm.Vec3(0, 0, edge[2]))
+    nonbonded = openmm.NonbondedForce()
+    nonbonded.setNonbondedMethod(openmm.NonbondedForce.CutoffPeriodic)
+    nonbonded.setCutoffDistance(0.7)
+    positions = []
+    grid = [0.2, 0.6, 1.0, 1.4]
+    for charge, layers in ((0.5, (0.1, 0.4)), (-0.5, (1.95, 2.25))):
+        for x in layers:
+            for y in grid:
+                for z in grid:
+                    system.addParticle(40.0)
+                    nonbonded.addParticle(charge, 0.2, 0.5)
+                    positions.append((x, y, z))
+    oxygen = system.addParticle(15.999)
+    nonbonded.addParticle(-0.834, 0.315, 0.636)
+    for offset in ((0.0757, 0.0586, 0.0), (-0.0757, 0.0586, 0.0)):
+        system.addParticle(1.008)
+        nonbonded.addParticle(0.417, 1.0, 0.0)
+        positions.append(tuple(np.add((1.17, 0.8, 0.8), offset)))
+    positions.insert(oxygen, (1.17, 0.8, 0.8))
+    for hydrogen in (oxygen + 1, oxygen + 2):
+        system.addConstraint(oxygen, hydrogen, 0.09572)
+        nonbonded.addException(oxygen, hydrogen, 0.0, 1.0, 0.0)
+    system.addConstraint(oxygen + 1, oxygen + 2, 0.15139)
+    nonbonded.addException(oxygen + 1, oxygen + 2, 0.0, 1.0, 0.0)
+    system.addForce(nonbonded)
+    velocities = np.random.default_rng(3).normal(0.0, 0.3, (system.getNumParticles(), 3))
+    return system, np.array(positions), velocities
+
+
+def shrink_between_steps_and_compare(platformName, properties=None, evaluations=0):
+    """Two steps of the two slabs, `evaluations` force evaluations by getState(), the box 0.25 nm
+    shorter along x, one step; then the same step from a fresh Context loaded from a checkpoint of the
+    state right after the change. The largest differences of positions and velocities."""
+    system, positions, velocities = two_slabs_across_the_boundary()
+    integrator = rigid_integrator()
+    if properties is None:
+        context = make_context(system, integrator, platformName)
+    else:
+        context = openmm.Context(system, integrator, openmm.Platform.getPlatformByName(platformName), properties)
+    context.setPositions(positions)
+    context.setVelocities(velocities)
+    integrator.step(2)
+    for _ in range(evaluations):
+        context.getState(getEnergy=True)
+    box = context.getState().getPeriodicBoxVectors(asNumpy=True).value_in_unit(unit.nanometer)
+    box[0] *= 2.75 / 3.0
+    context.setPeriodicBoxVectors(*box)
+    checkpoint = context.createCheckpoint()
+    integrator.step(1)
+    answerIntegrator = rigid_integrator()
+    answer = make_context(system, answerIntegrator, platformName)
+    answer.loadCheckpoint(checkpoint)
+    answerIntegrator.step(1)
+    return (max_difference(positions_of(context), positions_of(answer)),
+            max_difference(velocities_of(context), velocities_of(answer)))
+
+
+@pytest.mark.parametrize("platformName", PLATFORMS)
+def test_box_change_between_steps_brings_new_neighbours(platformName):
+    """A box shrunk between steps (no new positions) brings pairs within the cutoff that were beyond
+    it and its padding in the old box. The GPU platforms rebuild their neighbour list only when a
+    particle moved; the step after the change must still take those pairs (as a fresh Context does),
+    here 16 pairs 0.6 nm apart across the x boundary, about 36 kJ/mol/nm each (missed, they change
+    the velocities by 2e-3 nm/ps)."""
+    positions, velocities = shrink_between_steps_and_compare(platformName)
+    assert_below(positions=(positions, tolerance(platformName, 1e-12, 1e-9)),
+                 velocities=(velocities, tolerance(platformName, 1e-12, 1e-7)))
+
+
+@pytest.mark.skipif("OpenCL" not in PLATFORMS, reason="the OpenCL platform is not available")
+def test_box_change_between_steps_brings_new_neighbours_on_every_device():
+    """The same on a Context that shares its force evaluations between two devices (the one OpenCL
+    device twice), each building the neighbour list of its own range of tiles. The platform's load
+    balancing resets both lists in the first 200 evaluations and every 30th after; 205 evaluations
+    come first, so that the step after the change is not one of those."""
+    positions, velocities = shrink_between_steps_and_compare(
+        "OpenCL", {"Precision": "double", "DeviceIndex": "0,0"}, evaluations=205)
+    assert_below(positions=(positions, 1e-9), velocities=(velocities, 1e-7))
+
+
 # ------------------------------------------------------------------------------------------------
 # Explicit bodies are molecules, and keep the shape they were given
 # ------------------------------------------------------------------------------------------------

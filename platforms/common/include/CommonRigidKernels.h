@@ -21,16 +21,19 @@ namespace OpenMMRigid {
  * the platform's order and precision (posq, plus posqCorrection in mixed precision); the bodies
  * follow atom reordering through the inverse of the atom index, rebuilt after each reorder.
  *
- * The platform's factory supplies the ComputeContext and a way to make the platform's
- * IntegrationUtilities for a System: the constraint solver for the constraints among free
- * particles (the System's own utilities would also constrain the bodies' atoms).
+ * The platform's factory supplies the ComputeContext, a way to make the platform's
+ * IntegrationUtilities for a System (the constraint solver for the constraints among free
+ * particles: the System's own utilities would also constrain the bodies' atoms), and a way to make
+ * the platform rebuild its neighbour lists (boxChanged()), which the common interface lacks.
  */
 class CommonIntegrateRigidBodyStepKernel : public IntegrateRigidBodyStepKernel {
 public:
     /** Makes the platform's IntegrationUtilities for a System (owned by the caller). */
     typedef std::function<OpenMM::IntegrationUtilities*(const OpenMM::System&)> SolverFactory;
+    /** Makes every device of the platform rebuild its neighbour list at the next force evaluation. */
+    typedef std::function<void()> NeighbourListRebuild;
     CommonIntegrateRigidBodyStepKernel(std::string name, const OpenMM::Platform& platform, OpenMM::ComputeContext& cc,
-                                       SolverFactory makeSolver);
+                                       SolverFactory makeSolver, NeighbourListRebuild rebuildNeighbourLists);
     ~CommonIntegrateRigidBodyStepKernel();
     void initialize(OpenMM::ContextImpl& context, RigidBodySystem& bodies) override;
     void setGeometry(OpenMM::ContextImpl& context, const StepGeometry& geometry) override;
@@ -53,6 +56,7 @@ public:
                                       double& rotational) override;
     double computeKineticEnergy(OpenMM::ContextImpl& context) override;
     void beforeLastForces(OpenMM::ContextImpl& context) override;
+    void boxChanged(OpenMM::ContextImpl& context) override;
     void finishStep(OpenMM::ContextImpl& context, double dt) override;
 private:
     /** The rigid projection of every body's velocities on the device; false if some were not finite (nothing is written for those bodies). */
@@ -62,6 +66,7 @@ private:
     struct Impl;
     OpenMM::ComputeContext& cc;
     SolverFactory makeSolver;
+    NeighbourListRebuild rebuildNeighbourLists;
     std::unique_ptr<Impl> impl;
 };
 

@@ -352,8 +352,8 @@ void CommonIntegrateRigidBodyStepKernel::Impl::followWrapping() {
 }
 
 CommonIntegrateRigidBodyStepKernel::CommonIntegrateRigidBodyStepKernel(string name, const Platform& platform, ComputeContext& cc,
-                                                                       SolverFactory makeSolver) :
-        IntegrateRigidBodyStepKernel(name, platform), cc(cc), makeSolver(makeSolver) {
+                                                                       SolverFactory makeSolver, NeighbourListRebuild rebuildNeighbourLists) :
+        IntegrateRigidBodyStepKernel(name, platform), cc(cc), makeSolver(makeSolver), rebuildNeighbourLists(rebuildNeighbourLists) {
 }
 
 CommonIntegrateRigidBodyStepKernel::~CommonIntegrateRigidBodyStepKernel() {
@@ -935,6 +935,14 @@ void CommonIntegrateRigidBodyStepKernel::beforeLastForces(ContextImpl& context) 
     d.statusPending = true;
     cc.setStepsSinceReorder(cc.getStepsSinceReorder() + 1);
     cc.setAtomsWereReordered(false);
+}
+
+void CommonIntegrateRigidBodyStepKernel::boxChanged(ContextImpl& context) {
+    // The platform rebuilds a neighbour list only when a particle has moved by half the padding since
+    // the last build: a box made smaller without moving the particles would keep the old box's list,
+    // which misses the pairs that the new box's images bring within the cutoff.
+    if (cc.getNonbondedUtilities().getUseCutoff())
+        rebuildNeighbourLists();
 }
 
 void CommonIntegrateRigidBodyStepKernel::finishStep(ContextImpl& context, double dt) {

@@ -5,6 +5,7 @@
 #include "openmm/internal/windowsExport.h"
 #include "openmm/cuda/CudaContext.h"
 #include "openmm/cuda/CudaIntegrationUtilities.h"
+#include "openmm/cuda/CudaNonbondedUtilities.h"
 #include "openmm/cuda/CudaPlatform.h"
 
 using namespace OpenMM;
@@ -15,5 +16,5 @@ extern "C" OPENMM_EXPORT void registerPlatforms() {
 
 extern "C" OPENMM_EXPORT void registerKernelFactories() {
     // No CUDA platform (libOpenMMCUDA.so not loaded into OpenMM): nothing to register with.
-    registerCommonRigidKernels<CommonRigidKernelFactory<CudaPlatform::PlatformData, CudaContext, CudaIntegrationUtilities> >("CUDA");
+    registerCommonRigidKernels<CommonRigidKernelFactory<CudaPlatform::PlatformData, CudaContext, CudaIntegrationUtilities, CudaNonbondedUtilities> >("CUDA");
 }

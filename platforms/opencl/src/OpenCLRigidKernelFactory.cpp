@@ -4,6 +4,7 @@
 #include "openmm/internal/windowsExport.h"
 #include "openmm/opencl/OpenCLContext.h"
 #include "openmm/opencl/OpenCLIntegrationUtilities.h"
+#include "openmm/opencl/OpenCLNonbondedUtilities.h"
 #include "openmm/opencl/OpenCLPlatform.h"
 
 using namespace OpenMM;
@@ -14,5 +15,5 @@ extern "C" OPENMM_EXPORT void registerPlatforms() {
 
 extern "C" OPENMM_EXPORT void registerKernelFactories() {
     // Without an OpenCL platform (no OpenCL runtime) there is nothing to register with.
-    registerCommonRigidKernels<CommonRigidKernelFactory<OpenCLPlatform::PlatformData, OpenCLContext, OpenCLIntegrationUtilities> >("OpenCL");
+    registerCommonRigidKernels<CommonRigidKernelFactory<OpenCLPlatform::PlatformData, OpenCLContext, OpenCLIntegrationUtilities, OpenCLNonbondedUtilities> >("OpenCL");
 }
