@@ -941,6 +941,7 @@ void CommonIntegrateRigidBodyStepKernel::boxChanged(ContextImpl& context) {
     // The platform rebuilds a neighbour list only when a particle has moved by half the padding since
     // the last build: a box made smaller without moving the particles would keep the old box's list,
     // which misses the pairs that the new box's images bring within the cutoff.
+    ContextSelector selector(cc);
     if (cc.getNonbondedUtilities().getUseCutoff())
         rebuildNeighbourLists();
 }
