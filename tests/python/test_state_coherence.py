@@ -256,11 +256,11 @@ def two_slabs_across_the_boundary():
                     positions.append((x, y, z))
     oxygen = system.addParticle(15.999)
     nonbonded.addParticle(-0.834, 0.315, 0.636)
+    positions.append((1.17, 0.8, 0.8))
     for offset in ((0.0757, 0.0586, 0.0), (-0.0757, 0.0586, 0.0)):
         system.addParticle(1.008)
         nonbonded.addParticle(0.417, 1.0, 0.0)
-        positions.append(tuple(np.add((1.17, 0.8, 0.8), offset)))
-    positions.insert(oxygen, (1.17, 0.8, 0.8))
+        positions.append(tuple(np.add(positions[oxygen], offset)))
     for hydrogen in (oxygen + 1, oxygen + 2):
         system.addConstraint(oxygen, hydrogen, 0.09572)
         nonbonded.addException(oxygen, hydrogen, 0.0, 1.0, 0.0)
