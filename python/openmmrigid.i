@@ -30,6 +30,29 @@ static void raiseOpenMMException(const std::string& message) {
     PyErr_SetString(exceptionClass, message.c_str());
     Py_DECREF(exceptionClass);
 }
+
+#include "internal/AccuracyCheck.h"
+
+/**
+ * The accuracy check's notifier in Python (AccuracyCheck::setNotifier()): the message issued as an
+ * openmmrigid.AccuracyWarning by openmmrigid.integrator._issueAccuracyWarning, from within the step
+ * that fired, whichever wrapper called it. False, with the Python error left set, if issuing it
+ * raised (the warning filters made it an error): the step then stops with it.
+ */
+static bool pythonAccuracyNotifier(const std::string& message) {
+    PyGILState_STATE gil = PyGILState_Ensure();
+    PyObject* module = PyImport_ImportModule("openmmrigid.integrator");
+    PyObject* result = (module == NULL ? NULL : PyObject_CallMethod(module, "_issueAccuracyWarning", "s", message.c_str()));
+    const bool issued = (result != NULL);
+    Py_XDECREF(result);
+    Py_XDECREF(module);
+    PyGILState_Release(gil);
+    return issued;
+}
+%}
+
+%init %{
+    OpenMMRigid::AccuracyCheck::setNotifier(&pythonAccuracyNotifier);
 %}
 
 // Every C++ exception (OpenMM::OpenMMException and std::invalid_argument both derive from
@@ -39,7 +62,9 @@ static void raiseOpenMMException(const std::string& message) {
         $action
     }
     catch (const std::exception& e) {
-        raiseOpenMMException(e.what());
+        // A Python error already set is the reason (an AccuracyWarning that the filters made an error).
+        if (!PyErr_Occurred())
+            raiseOpenMMException(e.what());
         SWIG_fail;
     }
     catch (...) {

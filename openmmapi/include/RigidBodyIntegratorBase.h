@@ -141,10 +141,23 @@ public:
      * 0.0116, 0.0177 amu nm^2), 0.04 makes every water a spherical top, whose exact free rotation is
      * also the cheapest one. Set it before the integrator is bound to a Context.
      *
-     * @param moment  the minimum moment, measured in amu nm^2 (0 for none)
-     * @throws OpenMMException if the moment is negative or not finite, or the integrator is bound to a Context
+     * Velocities that do not come from this integrator are read as rigid motion with these moments:
+     * setVelocitiesToTemperature() draws for them, and a checkpoint records the minimum moment and is
+     * refused by an integrator with another one; but velocities set from a State or an array made with
+     * other moments keep their angular velocities, so their rotational kinetic energy changes by I'/I.
+     * A System with an AndersenThermostat, and a CompoundIntegrator, draw velocities for the particles'
+     * own moments: with raised moments, either is refused when the Context is made.
+     *
+     * @param moment  the minimum moment, measured in amu nm^2 (0 for none, at most MaximumMinimumMoment)
+     * @throws OpenMMException if the moment is not between 0 and MaximumMinimumMoment, or the integrator is bound to a Context
      */
     void setMinimumMomentOfInertia(double moment);
+    /**
+     * The largest minimum moment of inertia, in amu nm^2: 16,000 times the smallest moment of water.
+     * Larger ones only slow the rotation further, while the rounding of each body's angular velocity
+     * is magnified by the ratio of its moments (at 1e50, setVelocitiesToTemperature() reads 1e24 K).
+     */
+    static constexpr double MaximumMinimumMoment = 100.0;
     /**
      * Get the kinetic energy of the translation of the bodies' centres of mass plus that of the free
      * particles. Only available once the integrator is bound to a Context.
@@ -266,11 +279,17 @@ public:
      * run without friction drifts more than 0.01 kT/ps per degree of freedom, or, with the Bussi
      * thermostat, the energy error fluctuates more than 0.06 times the kinetic energy, in two 2 ps
      * windows in a row), it records a message
-     * that names the step size, the figure and the remedies (getAccuracyWarning()). In Python each
-     * step() then issues it once as an openmmrigid.AccuracyWarning (a RuntimeWarning); it does not
-     * stop the run. A System with an AndersenThermostat is not checked (its redraws between steps
-     * are not rigid motion, and their projection would read as an energy drift). The README ("The
-     * accuracy check") gives the limits and the measurements behind them.
+     * that names the step size, the figure and the remedies (getAccuracyWarning()), and says it once,
+     * from within the step, however the step was taken (directly, through a CompoundIntegrator or
+     * app.Simulation): in Python as an openmmrigid.AccuracyWarning (a RuntimeWarning) pointing at the
+     * line that stepped, in C++ on std::cerr. It does not stop the run, unless Python's warning
+     * filters make the warning an error. Loading a checkpoint, or a State from before the check fired,
+     * starts the check again. A System with an AndersenThermostat is not checked (its redraws between
+     * steps are not rigid motion, and their projection would read as an energy drift). Not seen by the
+     * check: the configurational bias of the Verlet splitting with the Bussi thermostat and raised
+     * moments of inertia (rigid water at 8 fs), whose energy error fluctuates too little to judge it;
+     * use Omelyan2 or RigidBodyLangevinIntegrator there. The README ("The accuracy check") gives the
+     * limits and the measurements behind them.
      *
      * @param check  true to check (the default), false to take no measurement for it
      */
@@ -428,6 +447,8 @@ private:
     AccuracyCheck accuracyMonitor;
     double checkedWork;
     bool bound, forcesAreValid, needsProjection;
+    /** Whether the bodies' states came from the checkpoint just loaded (the notices that follow the load change nothing). */
+    bool restoredCheckpoint;
     /** The periodic box of the last force evaluation: setPeriodicBoxVectors() sends the integrator no notice. */
     OpenMM::Vec3 forcesBox[3];
     double loadedVelocityKick;

@@ -4,9 +4,11 @@
 #include "RigidBodyOptions.h"
 #include "internal/RigidBodySystem.h"
 #include "openmm/KernelImpl.h"
+#include "openmm/OpenMMException.h"
 #include "openmm/internal/ContextImpl.h"
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace OpenMMRigid {
 
@@ -141,6 +143,25 @@ public:
      * evaluation; the Reference and CPU platforms build theirs at every evaluation, and do nothing.
      */
     virtual void boxChanged(OpenMM::ContextImpl& context) {
+    }
+    /**
+     * The bodies' states (RigidBodyDynamics::StateSize doubles each, as RigidBodyDynamics::getStates()
+     * writes them), for a checkpoint whose positions and velocities are current (positionsAreCurrent()).
+     * Returns false, writing nothing, on a platform that continues a loaded checkpoint from a fit of
+     * the bodies instead (the common-compute platforms, whose checkpoints hold their own device arrays).
+     */
+    virtual bool getBodyStates(OpenMM::ContextImpl& context, std::vector<double>& states) {
+        return false;
+    }
+    /**
+     * After a checkpoint of this platform that getBodyStates() wrote is loaded, every body with its
+     * shape: take the bodies' states from it, with the Context's positions and velocities as the ones
+     * this kernel last wrote, so that the run continues exactly as it would have without the
+     * checkpoint. Returns false, changing nothing, if the states do not place the bodies exactly at
+     * the Context's positions (bodies whose shapes were taken from other positions): they are fitted.
+     */
+    virtual bool setBodyStates(OpenMM::ContextImpl& context, const std::vector<double>& states) {
+        throw OpenMM::OpenMMException("internal error: this platform saves no bodies' states in its checkpoints");
     }
     /** After the last stage: advance the context's time and step count by dt, and record the positions written. */
     virtual void finishStep(OpenMM::ContextImpl& context, double dt) = 0;

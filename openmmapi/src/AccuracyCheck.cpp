@@ -1,12 +1,32 @@
 #include "internal/AccuracyCheck.h"
 #include "openmm/reference/SimTKOpenMMRealType.h"
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <iostream>
 #include <sstream>
 
 using namespace std;
 
 namespace OpenMMRigid {
+
+namespace {
+
+atomic<AccuracyCheck::Notifier> accuracyNotifier(nullptr);
+
+} // namespace
+
+void AccuracyCheck::setNotifier(Notifier notifier) {
+    accuracyNotifier = notifier;
+}
+
+bool AccuracyCheck::notify(const string& text) {
+    Notifier notifier = accuracyNotifier;
+    if (notifier != nullptr)
+        return notifier(text);
+    cerr << "Warning: " << text << endl;
+    return true;
+}
 
 void AccuracyCheck::restart() {
     started = false;
@@ -104,6 +124,7 @@ void AccuracyCheck::closeWindow() {
             head << " and friction " << setting.friction << "/ps";
         message = head.str() + " has left its accurate range: " + text.str() + ". Its averages are biased. " + setting.remedies +
                 "; setAccuracyCheck(False) turns this check off.";
+        firedTime = lastTime;
     }
 }
 

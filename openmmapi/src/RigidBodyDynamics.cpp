@@ -493,6 +493,26 @@ void RigidBodyDynamics::setStates(const vector<double>& flat) {
     }
 }
 
+bool RigidBodyDynamics::restoreStates(const vector<double>& flat, const vector<Vec3>& positions, const vector<Vec3>& velocities) {
+    const vector<BodyState> previous = states;
+    setStates(flat);
+    // The states place every body particle where the positions have it, bit for bit, if they are the
+    // ones that wrote these positions with these bodies' shapes.
+    vector<Vec3> placed(positions);
+    for (size_t b = 0; b < states.size(); b++) {
+        placeParticles(b, placed);
+        const int n = system.getBodySize(b);
+        const int* members = system.getBodyParticles(b);
+        for (int i = 0; i < n; i++)
+            if (placed[members[i]] != positions[members[i]]) {
+                states = previous;
+                return false;
+            }
+    }
+    writtenVelocities = velocities;
+    return true;
+}
+
 void RigidBodyDynamics::thermalize(vector<Vec3>& positions, vector<Vec3>& velocities, double c, double kT,
                                    uint64_t seed, uint64_t step, double constraintTolerance) {
     requireConstraints();

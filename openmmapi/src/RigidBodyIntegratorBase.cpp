@@ -1,10 +1,12 @@
 #include "RigidBodyIntegratorBase.h"
 #include "RigidBodyKernels.h"
+#include "internal/RigidBodyDynamics.h"
 #include "internal/RigidBodyMolecules.h"
 #include "internal/RigidBodySystem.h"
 #include "internal/StepSequence.h"
 #include "numerics/SymmetricEigen.h"
 #include "openmm/AndersenThermostat.h"
+#include "openmm/CompoundIntegrator.h"
 #include "openmm/Context.h"
 #include "openmm/OpenMMException.h"
 #include "openmm/internal/ContextImpl.h"
@@ -24,19 +26,34 @@ namespace OpenMMRigid {
 
 namespace {
 
+/** Whether the System has an AndersenThermostat. */
+bool hasAndersenThermostat(const System& system) {
+    for (int f = 0; f < system.getNumForces(); f++)
+        if (dynamic_cast<const AndersenThermostat*>(&system.getForce(f)) != NULL)
+            return true;
+    return false;
+}
+
 /**
- * Refuse an AndersenThermostat where it would thermalise part of a body. OpenMM's Andersen thermostat
+ * Refuse an AndersenThermostat with raised moments of inertia, and where it would thermalise part of a body. OpenMM's Andersen thermostat
  * redraws the velocities of whole constraint clusters (AndersenThermostatImpl::calcParticleGroups), of
  * single particles where there are no constraints. A body that is one cluster is redrawn whole, and its
  * rigid projection is then an exact Maxwell-Boltzmann draw of its momenta; a body spread over several
  * clusters (an explicit body without its internal constraints) would be redrawn in parts, and the
  * projection onto rigid motion of partly redrawn velocities throws energy away: it reads cold.
  */
-void checkAndersenThermostat(const System& system, const vector<vector<int> >& bodies, const string& className) {
-    bool andersen = false;
-    for (int f = 0; f < system.getNumForces(); f++)
-        andersen = andersen || dynamic_cast<const AndersenThermostat*>(&system.getForce(f)) != NULL;
-    if (!andersen)
+void checkAndersenThermostat(const System& system, const vector<vector<int> >& bodies, bool explicitBodies, bool raisedMoments,
+                             const string& className) {
+    if (!hasAndersenThermostat(system))
+        return;
+    // Each redraw is a Maxwell-Boltzmann draw for the particles' masses: the rotation it gives a body
+    // is that of its own moments, which the projection keeps, so raised moments would be heated by I'/I.
+    if (raisedMoments)
+        throw OpenMMException(className + ": the System's AndersenThermostat draws velocities for the particles' own moments "
+                "of inertia, not the raised ones (setMinimumMomentOfInertia()); thermostat with the integrator instead "
+                "(RigidBodyLangevinIntegrator, or RigidBodyIntegrator.setThermostat())");
+    // Bodies found from constraints are whole clusters: only explicit ones can be split.
+    if (!explicitBodies)
         return;
     vector<int> parent(system.getNumParticles());
     for (size_t i = 0; i < parent.size(); i++)
@@ -67,14 +84,14 @@ void checkAndersenThermostat(const System& system, const vector<vector<int> >& b
 } // namespace
 
 RigidBodyIntegratorBase::RigidBodyIntegratorBase(const string& className, double stepSize) : className(className),
-        explicitBodies(false), rotationMethod(Exact), minimumMoment(0.0), measureShadowWork(false), measureHeat(false), accuracyCheck(true), checkingStep(false), andersenThermostat(false), checkedWork(0.0), bound(false), forcesAreValid(false), needsProjection(true), loadedVelocityKick(0.0) {
+        explicitBodies(false), rotationMethod(Exact), minimumMoment(0.0), measureShadowWork(false), measureHeat(false), accuracyCheck(true), checkingStep(false), andersenThermostat(false), checkedWork(0.0), bound(false), forcesAreValid(false), needsProjection(true), restoredCheckpoint(false), loadedVelocityKick(0.0) {
     setStepSize(stepSize);
     setConstraintTolerance(1e-5);
 }
 
 RigidBodyIntegratorBase::RigidBodyIntegratorBase(const string& className, double stepSize, const vector<vector<int> >& bodies) :
         className(className), bodies(bodies), explicitBodies(true), rotationMethod(Exact), minimumMoment(0.0), measureShadowWork(false), measureHeat(false), accuracyCheck(true), checkingStep(false), andersenThermostat(false), checkedWork(0.0), bound(false),
-        forcesAreValid(false), needsProjection(true), loadedVelocityKick(0.0) {
+        forcesAreValid(false), needsProjection(true), restoredCheckpoint(false), loadedVelocityKick(0.0) {
     setStepSize(stepSize);
     setConstraintTolerance(1e-5);
     for (size_t b = 0; b < bodies.size(); b++)
@@ -97,9 +114,9 @@ void RigidBodyIntegratorBase::setRotationMethod(RotationMethod method) {
 }
 
 void RigidBodyIntegratorBase::setMinimumMomentOfInertia(double moment) {
-    if (!(isfinite(moment) && moment >= 0.0))
-        throw OpenMMException(className + ": the minimum moment of inertia is " + to_string(moment) +
-                " amu nm^2; it must be a finite number >= 0");
+    if (!(isfinite(moment) && moment >= 0.0 && moment <= MaximumMinimumMoment))
+        throw OpenMMException(className + ": the minimum moment of inertia is " + to_string(moment) + " amu nm^2; it must be "
+                "between 0 and " + to_string((int) MaximumMinimumMoment) + " amu nm^2");
     if (bound && moment != minimumMoment)
         throw OpenMMException(className + ": the minimum moment of inertia cannot change once the integrator is bound to a "
                 "Context (the bodies' moments are set then); set it before creating the Context");
@@ -142,9 +159,14 @@ vector<int> RigidBodyIntegratorBase::getBodyParticles(int index) const {
 const RigidBodySystem& RigidBodyIntegratorBase::getShapedBody(int index) const {
     getBodyParticles(index);  // checks the index
     const RigidBodySystem& all = getTopology();
-    if (!all.isShapeKnown(index))
+    if (!all.isShapeKnown(index)) {
+        // Why the positions gave it none: not finite, or not set (every particle at one point).
+        vector<Vec3> positions;
+        context->getPositions(positions);
+        all.canShape(index, positions, currentGeometry(*context, all), true);
         throw OpenMMException(className + ": body " + to_string(index) + " is an explicit body, which takes its shape from "
                 "the positions; set the Context's positions first");
+    }
     return all;
 }
 
@@ -323,9 +345,17 @@ void RigidBodyIntegratorBase::initialize(ContextImpl& contextRef) {
     owner = &contextRef.getOwner();
     try {
         topology.reset(new RigidBodySystem(contextRef.getSystem(), bodies, explicitBodies, className, minimumMoment));
-        // Bodies found from constraints are whole clusters: only explicit ones can be split.
-        if (explicitBodies)
-            checkAndersenThermostat(contextRef.getSystem(), bodies, className);
+        if (!explicitBodies && topology->getNumBodies() == 0)
+            throw OpenMMException(className + ": the System has no rigid bodies: no cluster of its constraints is rigid (was it "
+                    "built with rigidWater=False?); build it with rigid water, or give the bodies explicitly");
+        checkAndersenThermostat(contextRef.getSystem(), bodies, explicitBodies, minimumMoment > 0.0, className);
+        // OpenMM's CompoundIntegrator draws setVelocitiesToTemperature() for the particles' masses
+        // without asking the integrators it holds, and its other integrators move the bodies with the
+        // moments of their masses: neither is the ensemble of raised moments.
+        if (minimumMoment > 0.0 && dynamic_cast<CompoundIntegrator*>(&contextRef.getIntegrator()) != NULL)
+            throw OpenMMException(className + ": raised moments of inertia (setMinimumMomentOfInertia()) cannot be used in a "
+                    "CompoundIntegrator, whose setVelocitiesToTemperature() and other integrators use the particles' own moments; "
+                    "use this integrator on its own");
         try {
             kernel = context->getPlatform().createKernel(IntegrateRigidBodyStepKernel::Name(), contextRef);
         }
@@ -351,9 +381,7 @@ void RigidBodyIntegratorBase::initialize(ContextImpl& contextRef) {
     // An AndersenThermostat redraws particle velocities between steps, not as rigid motion: each
     // step's projection then removes energy that is neither its error nor its heat, and the accuracy
     // check would read that as an energy drift. Such a run is not checked.
-    andersenThermostat = false;
-    for (int f = 0; f < contextRef.getSystem().getNumForces(); f++)
-        andersenThermostat = andersenThermostat || dynamic_cast<const AndersenThermostat*>(&contextRef.getSystem().getForce(f)) != NULL;
+    andersenThermostat = hasAndersenThermostat(contextRef.getSystem());
     checkedWork = 0.0;
     bound = true;
     forcesAreValid = false;
@@ -395,6 +423,12 @@ void RigidBodyIntegratorBase::stateChanged(State::DataType changed) {
     // (which the next projection may change), parameters, or a Force's updateParametersInContext()
     // (ContextImpl::systemChanged(), which sends Energy).
     forcesAreValid = false;
+    if (restoredCheckpoint) {
+        // ContextImpl::loadCheckpoint() ends with the notices Positions, Velocities, Parameters, Energy.
+        if (changed == State::Energy)
+            restoredCheckpoint = false;
+        return;
+    }
     if ((changed != State::Positions && changed != State::Velocities) || !bound)
         return;
     accuracyMonitor.stateSet();
@@ -416,10 +450,13 @@ void RigidBodyIntegratorBase::stateChanged(State::DataType changed) {
                 stepKernel.projectVelocities(*context);
             else
                 projectBodies();
-            needsProjection = false;
             applyLoadedVelocityKick();
+            needsProjection = false;
         }
         catch (const OpenMMException&) {
+            // Not lost: the bodies stay to be fitted, and the next step (or getBodyKind(), ...) says
+            // what is wrong, as the fit throws again there.
+            needsProjection = true;
         }
     }
 }
@@ -435,8 +472,10 @@ const char checkpointMagic[8] = {'O', 'M', 'M', 'R', 'I', 'G', 'I', 'D'};
 /**
  * 2: RigidBodyLangevinIntegrator's velocities are half a step behind the positions (1: on-step).
  * 3: the shadow work and the heat follow the step state.
+ * 4: then the minimum moment of inertia, and the bodies' states (IntegrateRigidBodyStepKernel::getBodyStates())
+ *    where the platform saves them: their number (0 for none), then RigidBodyDynamics::StateSize doubles each.
  */
-const int32_t checkpointVersion = 3;
+const int32_t checkpointVersion = 4;
 
 } // namespace
 
@@ -456,10 +495,20 @@ void RigidBodyIntegratorBase::createCheckpoint(ostream& stream) const {
         stream.write((const char*) &stepState.thermostatWork, sizeof(stepState.thermostatWork));
     stream.write((const char*) &stepState.shadowWork, sizeof(stepState.shadowWork));
     stream.write((const char*) &stepState.heat, sizeof(stepState.heat));
+    stream.write((const char*) &minimumMoment, sizeof(minimumMoment));
+    // The bodies' states, where they agree with the positions and velocities the checkpoint holds, so
+    // that a load continues the run exactly instead of fitting the bodies again (which rounds).
+    vector<double> states;
+    const bool current = !needsProjection && getKernel().positionsAreCurrent(*context) && getKernel().getBodyStates(*context, states);
+    int32_t numStates = (current ? topology->getNumBodies() : 0);
+    stream.write((const char*) &numStates, sizeof(numStates));
+    if (numStates > 0)
+        stream.write((const char*) states.data(), sizeof(double)*states.size());
 }
 
 void RigidBodyIntegratorBase::loadCheckpoint(istream& stream) {
     getKernel();  // throws unless bound
+    vector<double> savedStates;
     // A checkpoint from before version 1 has no header: its first bytes are a random number seed.
     int32_t version = 0;
     streampos start = stream.tellg();
@@ -511,14 +560,46 @@ void RigidBodyIntegratorBase::loadCheckpoint(istream& stream) {
             if (!stream)
                 throw OpenMMException(className + ": the checkpoint ends within the integrator's shadow work and heat");
         }
+        if (version >= 4) {
+            double savedMoment = 0.0;
+            int32_t numStates = -1;
+            stream.read((char*) &savedMoment, sizeof(savedMoment));
+            stream.read((char*) &numStates, sizeof(numStates));
+            if (!stream || (numStates != 0 && numStates != topology->getNumBodies()))
+                throw OpenMMException(className + ": the checkpoint's integrator state is damaged");
+            savedStates.resize((size_t) numStates*RigidBodyDynamics::StateSize);
+            stream.read((char*) savedStates.data(), sizeof(double)*savedStates.size());
+            if (!stream)
+                throw OpenMMException(className + ": the checkpoint ends within the bodies' states");
+            if (savedMoment != minimumMoment) {
+                // The Context holds the checkpoint's positions and velocities already: fitted at the next step.
+                needsProjection = true;
+                forcesAreValid = false;
+                throw OpenMMException(className + ": the checkpoint was written with a minimum moment of inertia of " +
+                        to_string(savedMoment) + " amu nm^2, this integrator has " + to_string(minimumMoment) +
+                        "; its velocities are rigid motion with those moments, so load it into an integrator with the same one");
+            }
+        }
         stepState = saved;
         // The work the kernel accumulated since it was last taken belongs to the state replaced: dropped.
         getKernel().takeThermostatWork(*context);
     }
     loadedVelocityKick = getLoadedVelocityKick(version);
+    // A checkpoint starts another run (or rewinds this one): the accuracy check starts again.
+    accuracyMonitor = AccuracyCheck();
     accuracyMonitor.stateSet();
-    needsProjection = true;
     forcesAreValid = false;
+    needsProjection = true;
+    restoredCheckpoint = false;
+    if (!savedStates.empty()) {
+        // Explicit bodies of a Context whose positions were never set take their shapes from these.
+        captureShapes(currentGeometry(*context, *topology), false);
+    }
+    if (!savedStates.empty() && topology->allShapesKnown() && getKernel().setBodyStates(*context, savedStates)) {
+        needsProjection = false;
+        // The notices of the positions and velocities the load sends next are of this state: no fit.
+        restoredCheckpoint = true;
+    }
 }
 
 bool RigidBodyIntegratorBase::makeBodiesCurrent(Vec3* box) {
@@ -526,9 +607,9 @@ bool RigidBodyIntegratorBase::makeBodiesCurrent(Vec3* box) {
         needsProjection = true;  // moved without a notice: a CompoundIntegrator's other integrator, the minimizer
     if (needsProjection) {
         projectBodies();
-        needsProjection = false;
         forcesAreValid = false;
         applyLoadedVelocityKick();
+        needsProjection = false;
     }
     // A new box (setPeriodicBoxVectors() between steps, without new positions) sends no notice; the
     // platform is told, since the particles may not have moved (boxChanged()).
@@ -581,6 +662,7 @@ void RigidBodyIntegratorBase::step(int steps) {
     // are those the kernel last wrote and no notice came since; the forces are current if, besides,
     // the Context's last evaluation was this integrator's, of its force groups (a getState() of other
     // groups overwrites them).
+    restoredCheckpoint = false;
     for (int i = 0; i < steps; ++i) {
         if (context->updateContextState()) {
             // A Force (e.g. a barostat) moved the particles: re-fit the bodies to them.
@@ -591,6 +673,11 @@ void RigidBodyIntegratorBase::step(int steps) {
         makeBodiesCurrent(box);
         // Shadow work needs the potential energy the step starts from: the last step's, or evaluated here.
         // The accuracy check measures in episodes (internal/AccuracyCheck.h).
+        // A run taken back to before the check fired (a State or checkpoint loaded) is judged again.
+        if (context->getTime() < accuracyMonitor.getFiredTime()*(1.0 - 1e-12)) {
+            accuracyMonitor = AccuracyCheck();
+            accuracyMonitor.stateSet();
+        }
         AccuracyCheck::Setting setting;
         if (accuracyCheck && !andersenThermostat) {
             setting = getAccuracySetting();
@@ -613,15 +700,21 @@ void RigidBodyIntegratorBase::step(int steps) {
             accuracyMonitor.restart();
             throw;
         }
+        bool fired = false;
         if (checkingStep) {
             checkedWork += stepState.stepShadowWork;
+            const bool quiet = accuracyMonitor.getMessage().empty();
             accuracyMonitor.record(setting, context->getTime(), checkedWork, stepState.stepShadowWork, stepState.stepKinetic);
+            fired = quiet && !accuracyMonitor.getMessage().empty();
         }
         else
             accuracyMonitor.restart();
         forcesAreValid = true;
         for (int k = 0; k < 3; k++)
             forcesBox[k] = box[k];
+        // Told here, inside step(), so that every way of stepping says it (a CompoundIntegrator, C++).
+        if (fired && !AccuracyCheck::notify(accuracyMonitor.getMessage()))
+            throw OpenMMException(accuracyMonitor.getMessage());
     }
 }
 

@@ -265,8 +265,7 @@ void RigidBodySystem::captureShapes(const vector<Vec3>& positions, const StepGeo
             shapeBody(b, positions, geometry, strict, constraintTolerance);
 }
 
-bool RigidBodySystem::shapeBody(int b, const vector<Vec3>& positions, const StepGeometry& geometry, bool strict,
-                                double constraintTolerance) {
+bool RigidBodySystem::canShape(int b, const vector<Vec3>& positions, const StepGeometry& geometry, bool strict) const {
     const int n = getBodySize(b);
     const int* members = getBodyParticles(b);
     vector<Vec3> whole(n);
@@ -276,14 +275,22 @@ bool RigidBodySystem::shapeBody(int b, const vector<Vec3>& positions, const Step
         finite = finite && isfinite(whole[i][0]) && isfinite(whole[i][1]) && isfinite(whole[i][2]);
         spread = spread || whole[i] != whole[0];
     }
-    if (!finite || !spread) {
-        if (!strict)
-            return false;
-        for (int i = 0; i < n; i++)
-            requireFinite(whole[i], "position", members[i], b);
-        throw OpenMMException(className + ": the particles of body " + to_string(b) + " all sit at one point; "
-                "an explicit body takes its shape from the positions, so set them before using the body");
-    }
+    if (finite && spread)
+        return true;
+    if (!strict)
+        return false;
+    for (int i = 0; i < n; i++)
+        requireFinite(whole[i], "position", members[i], b);
+    throw OpenMMException(className + ": the particles of body " + to_string(b) + " all sit at one point (have the "
+            "Context's positions been set?); an explicit body takes its shape from the positions");
+}
+
+bool RigidBodySystem::shapeBody(int b, const vector<Vec3>& positions, const StepGeometry& geometry, bool strict,
+                                double constraintTolerance) {
+    if (!canShape(b, positions, geometry, strict))
+        return false;
+    vector<Vec3> whole(getBodySize(b));
+    assemble(b, positions, geometry, whole.data());
     // The constraints inside the body hold in its shape: the positions are taken with them applied, as a
     // constrained integrator applies them to the positions it is given.
     if (!internalConstraints[b].empty())

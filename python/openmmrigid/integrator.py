@@ -81,28 +81,29 @@ for _name in ("getTemperature", "setTemperature"):
 
 
 class AccuracyWarning(RuntimeWarning):
-    """Issued once per Context by ``step()`` when the integrator's accuracy check
-    (``setAccuracyCheck()``) finds that the run has left its accurate range: the message names the
-    step size, the figure against its limit, and the remedies. A warning, not an error: the run goes
-    on, biased (``warnings.simplefilter("error", AccuracyWarning)`` makes it stop)."""
+    """Issued by ``step()``, once, when the integrator's accuracy check (``setAccuracyCheck()``) finds
+    that the run has left its accurate range: the message names the step size, the figure against its
+    limit, and the remedies. It is issued from within the step however the step was taken (the
+    integrator's ``step()``, a ``CompoundIntegrator``'s, ``app.Simulation.step()``), pointing at the
+    line of the script that stepped. A warning, not an error: the run goes on, biased
+    (``warnings.simplefilter("error", AccuracyWarning)`` makes the step stop with it; through a
+    ``CompoundIntegrator`` it then stops with an ``openmm.OpenMMException`` of the same message)."""
 
 
-def _warningOfAccuracy(method):
-    """step(), then the accuracy check's message, if it has one, issued once as an AccuracyWarning."""
-    def wrapper(self, *args, **kwargs):
-        result = method(self, *args, **kwargs)
-        message = self.getAccuracyWarning()
-        if message and getattr(self, "_accuracyWarningIssued", None) != message:
-            self._accuracyWarningIssued = message
-            warnings.warn(message, AccuracyWarning, stacklevel=2)
-        return result
-    functools.update_wrapper(wrapper, method)
-    wrapper.__wrapped__ = getattr(method, "__wrapped__", method)
-    return wrapper
+#: The folders whose frames a warning skips to reach the line that stepped: openmm's (app.Simulation)
+#: and this package's (the SWIG proxies).
+_INTERNAL_FOLDERS = tuple(os.path.dirname(os.path.abspath(module.__file__)) + os.sep for module in (openmm, _swig))
 
 
-for _class in (RigidBodyIntegrator, RigidBodyLangevinIntegrator):
-    _class.step = _warningOfAccuracy(_class.step)
+def _issueAccuracyWarning(message):
+    """Issue the accuracy check's message as an AccuracyWarning, attributed to the first frame outside
+    openmm and openmmrigid. Called by the SWIG module from within the step that fired."""
+    level, frame = 2, sys._getframe(1)
+    while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(_INTERNAL_FOLDERS):
+        frame = frame.f_back
+        level += 1
+    warnings.warn(message, AccuracyWarning, stacklevel=level)
+
 
 _KERNEL_NAME = "IntegrateRigidBodyStep"
 

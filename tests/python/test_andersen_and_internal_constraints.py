@@ -88,6 +88,25 @@ def test_andersen_thermostat_refused_for_bodies_it_would_split():
             openmm.Context(system, integrator, REFERENCE)
 
 
+def test_andersen_thermostat_with_raised_moments_is_refused():
+    """An AndersenThermostat redraws each water for its particles' masses, whose rotation the
+    projection keeps: with raised moments it heated the rotation by I'/I (floor 0.04: T_rot 974 K for
+    a 300 K bath, silently). Refused when the Context is made, for bodies found from the constraints
+    and explicit ones, naming the remedy; without raised moments the same Context runs."""
+    system, positions, bodies = water_gas(8)
+    for integrator in (openmmrigid.RigidBodyIntegrator(0.002), openmmrigid.RigidBodyIntegrator(0.002, bodies),
+                       openmmrigid.RigidBodyLangevinIntegrator(300.0, 1.0, 0.002)):
+        integrator.setMinimumMomentOfInertia(0.04)
+        name = type(integrator).__name__
+        with pytest.raises(openmm.OpenMMException, match=f"{name}: the System's AndersenThermostat draws velocities for the "
+                                                         "particles' own moments.*setThermostat"):
+            openmm.Context(system, integrator, REFERENCE)
+    integrator = openmmrigid.RigidBodyIntegrator(0.002)
+    context = openmm.Context(system, integrator, REFERENCE)
+    context.setPositions(positions)
+    integrator.step(2)
+
+
 # ------------------------------------------------------------------------------------------------
 # Explicit bodies with internal constraints
 # ------------------------------------------------------------------------------------------------

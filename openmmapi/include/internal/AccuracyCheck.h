@@ -95,13 +95,20 @@ public:
     const std::string& getMessage() const {
         return message;
     }
-    /** The last full window's heating (Langevin) or fluctuation ratio (others), and its drift (kT/ps/dof); NaN before. */
-    double getLastFigure() const {
-        return lastFigure;
+    /** The time (ps) after the step in which the signal fired; infinite before. */
+    double getFiredTime() const {
+        return firedTime;
     }
-    double getLastDrift() const {
-        return lastDrift;
-    }
+    /**
+     * What is told when a check fires, once per firing: its message. It returns false to stop the
+     * run: the step that fired has finished, and step() then throws an OpenMMException with the
+     * message. The Python module sets one that issues an openmmrigid.AccuracyWarning (false where the
+     * warning filters make it an error); without one, the message goes to std::cerr as a warning.
+     */
+    typedef bool (*Notifier)(const std::string& message);
+    static void setNotifier(Notifier notifier);
+    /** Tell the notifier (or std::cerr) the message; returns what the notifier returned (true for std::cerr). */
+    static bool notify(const std::string& message);
 private:
     /** Judge the window just completed. */
     void closeWindow();
@@ -114,6 +121,7 @@ private:
     bool inEpisode = true, skipNext = false;
     double nextEpisode = 0.0;
     double lastFigure = std::numeric_limits<double>::quiet_NaN(), lastDrift = std::numeric_limits<double>::quiet_NaN(), lastTime = 0.0;
+    double firedTime = std::numeric_limits<double>::infinity();
     std::string message;
 };
 

@@ -240,6 +240,14 @@ public:
     void getStates(std::vector<double>& states) const;
     void setStates(const std::vector<double>& states);
     /**
+     * setStates() with the positions and velocities they were saved with (a checkpoint's), if the
+     * states place every body particle exactly where the positions have it (else nothing changes and
+     * false is returned: the bodies are then to be fitted). The body particles' velocities are
+     * recorded as this class's own, so that the next stage keeps the states' momenta.
+     */
+    bool restoreStates(const std::vector<double>& states, const std::vector<OpenMM::Vec3>& positions,
+                       const std::vector<OpenMM::Vec3>& velocities);
+    /**
      * The text of the error that stops an unstable step: a body or free particle ("body", "particle")
      * that would move `distance` (not finite: to a non-finite position) in a drift of `drift` ps.
      */

@@ -158,6 +158,11 @@ public:
     void captureShapes(const std::vector<OpenMM::Vec3>& positions, const StepGeometry& geometry, bool strict,
                        double constraintTolerance);
     /**
+     * Whether these positions can give body b a shape (finite, not all at one point); if not and
+     * strict, an OpenMMException saying which it is.
+     */
+    bool canShape(int b, const std::vector<OpenMM::Vec3>& positions, const StepGeometry& geometry, bool strict) const;
+    /**
      * The positions of body b's particles, whole: the first particle where it is, and each other at
      * the periodic image nearest a neighbour already placed, along a tree that joins every particle
      * to the body by its shortest links (a minimum spanning tree: of the body's own shape once it has

@@ -39,6 +39,8 @@ public:
     void computeKickedKineticEnergies(OpenMM::ContextImpl& context, double kick, double constraintTolerance, double& translational,
                                       double& rotational);
     double computeKineticEnergy(OpenMM::ContextImpl& context);
+    bool getBodyStates(OpenMM::ContextImpl& context, std::vector<double>& states);
+    bool setBodyStates(OpenMM::ContextImpl& context, const std::vector<double>& states);
     void finishStep(OpenMM::ContextImpl& context, double dt);
 private:
     std::unique_ptr<HostThreads> threads;

@@ -159,6 +159,18 @@ double ReferenceIntegrateRigidBodyStepKernel::computeKineticEnergy(ContextImpl& 
     return dynamics->computeKineticEnergy(extractVelocities(context));
 }
 
+bool ReferenceIntegrateRigidBodyStepKernel::getBodyStates(ContextImpl& context, vector<double>& states) {
+    dynamics->getStates(states);
+    return true;
+}
+
+bool ReferenceIntegrateRigidBodyStepKernel::setBodyStates(ContextImpl& context, const vector<double>& states) {
+    if (!dynamics->restoreStates(states, extractPositions(context), extractVelocities(context)))
+        return false;
+    dynamics->copyParticleArray(extractPositions(context), writtenPositions);
+    return true;
+}
+
 void ReferenceIntegrateRigidBodyStepKernel::finishStep(ContextImpl& context, double dt) {
     ReferencePlatform::PlatformData& data = platformData(context);
     data.time += dt;
