@@ -34,10 +34,40 @@ static void raiseOpenMMException(const std::string& message) {
 #include "internal/AccuracyCheck.h"
 
 /**
+ * The Python error of the last accuracy warning that the warning filters made an error, and its
+ * message: kept out of the interpreter while the C++ exception that stops the step unwinds (openmm's
+ * own wrappers, a CompoundIntegrator's step(), fail with a Python error pending), and raised instead
+ * of an OpenMMException by this module's wrappers when that exception reaches them.
+ */
+static PyObject *accuracyErrorType = NULL, *accuracyErrorValue = NULL, *accuracyErrorTraceback = NULL;
+static std::string accuracyErrorMessage;
+
+static void dropAccuracyError() {
+    Py_CLEAR(accuracyErrorType);
+    Py_CLEAR(accuracyErrorValue);
+    Py_CLEAR(accuracyErrorTraceback);
+    accuracyErrorMessage.clear();
+}
+
+/** Set the kept accuracy error as the Python error if the C++ exception is the one it stopped; true if it did. */
+static bool restoreAccuracyError(const char* message) {
+    const bool ours = (accuracyErrorType != NULL && accuracyErrorMessage == message);
+    if (ours) {
+        PyErr_Restore(accuracyErrorType, accuracyErrorValue, accuracyErrorTraceback);
+        accuracyErrorType = accuracyErrorValue = accuracyErrorTraceback = NULL;
+        accuracyErrorMessage.clear();
+    }
+    else
+        dropAccuracyError();
+    return ours;
+}
+
+/**
  * The accuracy check's notifier in Python (AccuracyCheck::setNotifier()): the message issued as an
  * openmmrigid.AccuracyWarning by openmmrigid.integrator._issueAccuracyWarning, from within the step
- * that fired, whichever wrapper called it. False, with the Python error left set, if issuing it
- * raised (the warning filters made it an error): the step then stops with it.
+ * that fired, whichever wrapper called it (with the GIL released or not). False if issuing it raised
+ * (the warning filters made it an error): the step then stops, and the error is kept for
+ * restoreAccuracyError().
  */
 static bool pythonAccuracyNotifier(const std::string& message) {
     PyGILState_STATE gil = PyGILState_Ensure();
@@ -46,6 +76,11 @@ static bool pythonAccuracyNotifier(const std::string& message) {
     const bool issued = (result != NULL);
     Py_XDECREF(result);
     Py_XDECREF(module);
+    if (!issued) {
+        dropAccuracyError();
+        PyErr_Fetch(&accuracyErrorType, &accuracyErrorValue, &accuracyErrorTraceback);
+        accuracyErrorMessage = message;
+    }
     PyGILState_Release(gil);
     return issued;
 }
@@ -62,8 +97,8 @@ static bool pythonAccuracyNotifier(const std::string& message) {
         $action
     }
     catch (const std::exception& e) {
-        // A Python error already set is the reason (an AccuracyWarning that the filters made an error).
-        if (!PyErr_Occurred())
+        // The step stopped by an AccuracyWarning that the filters made an error raises that warning.
+        if (!restoreAccuracyError(e.what()))
             raiseOpenMMException(e.what());
         SWIG_fail;
     }

@@ -674,7 +674,7 @@ void RigidBodyIntegratorBase::step(int steps) {
         // Shadow work needs the potential energy the step starts from: the last step's, or evaluated here.
         // The accuracy check measures in episodes (internal/AccuracyCheck.h).
         // A run taken back to before the check fired (a State or checkpoint loaded) is judged again.
-        if (context->getTime() < accuracyMonitor.getFiredTime()*(1.0 - 1e-12)) {
+        if (!accuracyMonitor.getMessage().empty() && context->getTime() < accuracyMonitor.getFiredTime()*(1.0 - 1e-12)) {
             accuracyMonitor = AccuracyCheck();
             accuracyMonitor.stateSet();
         }

@@ -416,6 +416,80 @@ def test_accuracy_check_is_quiet_when_the_state_is_set_again_and_again(water_sta
     assert integrator.getAccuracyWarning() == ""
 
 
+FIRING_STEPS = int(round(8.0 / 0.011))  # Langevin at 11 fs fires within 6 ps
+
+
+def test_accuracy_warning_through_a_compound_integrator_and_simulation(water_state):
+    """The warning is issued from within the step, however it was taken: a CompoundIntegrator's step()
+    (which never called the Python wrapper that issued it before: 0 warnings while
+    getAccuracyWarning() held the message) and app.Simulation.step() both warn once, attributed to the
+    line of this file that stepped (not openmm/app/simulation.py)."""
+    system, state = water_state
+    compound = openmm.CompoundIntegrator()
+    compound.addIntegrator(openmm.VerletIntegrator(0.001))
+    compound.addIntegrator(RigidBodyLangevinIntegrator(300, 1, 0.011))
+    compound.setCurrentIntegrator(1)
+    context = openmm.Context(system, compound, *systems.platform_and_properties("CPU"))
+    context.setState(state)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", AccuracyWarning)
+        compound.step(FIRING_STEPS)
+        compound.step(10)
+    caught = [w for w in caught if issubclass(w.category, AccuracyWarning)]
+    assert len(caught) == 1 and "at a step of 11 fs" in str(caught[0].message)
+    assert caught[0].filename == __file__
+    del context
+    simulation = openmm.app.Simulation(openmm.app.Topology(), system, RigidBodyLangevinIntegrator(300, 1, 0.011),
+                                       *systems.platform_and_properties("CPU"))
+    simulation.context.setState(state)
+    with pytest.warns(AccuracyWarning, match="at a step of 11 fs") as caught:
+        simulation.step(FIRING_STEPS)
+    assert [w.filename for w in caught if issubclass(w.category, AccuracyWarning)] == [__file__]
+
+
+def test_accuracy_warning_as_an_error_stops_the_step(water_state):
+    """With the warning filtered as an error, the step that fired raises it: as an AccuracyWarning
+    from the integrator's own step(), as an OpenMMException with the same message from a
+    CompoundIntegrator's (whose wrapper is openmm's). The Context holds the state after that step."""
+    integrator = RigidBodyLangevinIntegrator(300, 1, 0.011)
+    context = water_context(water_state, integrator)
+    start, startTime = context.getStepCount(), context.getState().getTime().value_in_unit(unit.picosecond)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", AccuracyWarning)
+        with pytest.raises(AccuracyWarning, match="at a step of 11 fs"):
+            integrator.step(FIRING_STEPS)
+    steps = context.getStepCount() - start
+    assert 0 < steps < FIRING_STEPS
+    assert context.getState().getTime().value_in_unit(unit.picosecond) - startTime == pytest.approx(steps * 0.011)
+    integrator.step(2)  # fired once: the run goes on quietly
+    del context
+    compound = openmm.CompoundIntegrator()
+    compound.addIntegrator(RigidBodyLangevinIntegrator(300, 1, 0.011))
+    context = water_context(water_state, compound)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", AccuracyWarning)
+        with pytest.raises(openmm.OpenMMException, match="at a step of 11 fs"):
+            compound.step(FIRING_STEPS)
+
+
+def test_accuracy_check_is_rearmed_by_a_rewind(water_state):
+    """After the check fired, a checkpoint or State from before it makes the check judge the run
+    again (the warning stayed set and the rerun was never judged): the message is cleared and the
+    rerun fires again."""
+    integrator = RigidBodyLangevinIntegrator(300, 1, 0.011)
+    context = water_context(water_state, integrator)
+    checkpoint = context.createCheckpoint()
+    before = context.getState(getPositions=True, getVelocities=True)
+    for rewind in (lambda: context.loadCheckpoint(checkpoint), lambda: context.setState(before)):
+        with pytest.warns(AccuracyWarning, match="at a step of 11 fs"):
+            integrator.step(FIRING_STEPS)
+        assert integrator.getAccuracyWarning() != ""
+        rewind()
+        if integrator.getAccuracyWarning():  # a State sends no notice of its time: cleared at the next step
+            integrator.step(1)
+        assert integrator.getAccuracyWarning() == ""
+
+
 def test_accuracy_check_leaves_andersen_runs_alone(water_state):
     """An AndersenThermostat's redraws are not rigid motion: the next step's projection removes energy
     (counted as shadow work), which the check would read as a drift; such runs are not checked."""
