@@ -642,7 +642,7 @@ void testThermostatStepsFollowEquationA7(Platform& platform) {
         positions.push_back(Vec3(i%3, (i/3)%2, i/6)*0.6);
         velocities.push_back(Vec3(normal(rng), normal(rng), normal(rng))*sqrt(boltzmann*300.0/mass));
     }
-    RigidBodyIntegrator integrator(0.002);
+    RigidBodyIntegrator integrator(0.002, vector<vector<int> >());  // no bodies, explicitly
     integrator.setThermostat(250.0, 0.01);
     integrator.setRandomNumberSeed(29);
     integrator.setMeasureHeat(true);

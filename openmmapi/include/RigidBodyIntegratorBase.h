@@ -282,7 +282,7 @@ public:
      * that names the step size, the figure and the remedies (getAccuracyWarning()), and says it once,
      * from within the step, however the step was taken (directly, through a CompoundIntegrator or
      * app.Simulation): in Python as an openmmrigid.AccuracyWarning (a RuntimeWarning) pointing at the
-     * line that stepped, in C++ on std::cerr. It does not stop the run, unless Python's warning
+     * line that stepped, in C++ on the standard error stream. It does not stop the run, unless Python's warning
      * filters make the warning an error. Loading a checkpoint, or a State from before the check fired,
      * starts the check again. A System with an AndersenThermostat is not checked (its redraws between
      * steps are not rigid motion, and their projection would read as an energy drift). Not seen by the
