@@ -357,7 +357,10 @@ protected:
     std::vector<OpenMM::Vec3> getVelocitiesForTemperature(const OpenMM::System& system, double temperature, int randomSeed) const;
     /**
      * After the positions and velocities OpenMM writes: a header (format version, class name), the
-     * seed and counter of the random numbers, and, if hasThermostatWork(), the thermostat's work.
+     * seed and counter of the random numbers, and, if hasThermostatWork(), the thermostat's work;
+     * the shadow work and heat; the minimum moment of inertia (a load with another is refused); the
+     * bodies' states where the platform saves them (IntegrateRigidBodyStepKernel::getBodyStates()),
+     * from which a load continues exactly instead of fitting the bodies again.
      */
     void createCheckpoint(std::ostream& stream) const;
     void loadCheckpoint(std::istream& stream);
