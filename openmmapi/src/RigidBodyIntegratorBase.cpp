@@ -17,6 +17,7 @@
 #include <functional>
 #include <istream>
 #include <ostream>
+#include <sstream>
 #include <string>
 
 using namespace OpenMM;
@@ -114,9 +115,12 @@ void RigidBodyIntegratorBase::setRotationMethod(RotationMethod method) {
 }
 
 void RigidBodyIntegratorBase::setMinimumMomentOfInertia(double moment) {
-    if (!(isfinite(moment) && moment >= 0.0 && moment <= MaximumMinimumMoment))
-        throw OpenMMException(className + ": the minimum moment of inertia is " + to_string(moment) + " amu nm^2; it must be "
-                "between 0 and " + to_string((int) MaximumMinimumMoment) + " amu nm^2");
+    if (!(isfinite(moment) && moment >= 0.0 && moment <= MaximumMinimumMoment)) {
+        stringstream text;
+        text << className << ": the minimum moment of inertia is " << moment << " amu nm^2; it must be between 0 and " <<
+                MaximumMinimumMoment << " amu nm^2";
+        throw OpenMMException(text.str());
+    }
     if (bound && moment != minimumMoment)
         throw OpenMMException(className + ": the minimum moment of inertia cannot change once the integrator is bound to a "
                 "Context (the bodies' moments are set then); set it before creating the Context");
@@ -575,9 +579,11 @@ void RigidBodyIntegratorBase::loadCheckpoint(istream& stream) {
                 // The Context holds the checkpoint's positions and velocities already: fitted at the next step.
                 needsProjection = true;
                 forcesAreValid = false;
-                throw OpenMMException(className + ": the checkpoint was written with a minimum moment of inertia of " +
-                        to_string(savedMoment) + " amu nm^2, this integrator has " + to_string(minimumMoment) +
-                        "; its velocities are rigid motion with those moments, so load it into an integrator with the same one");
+                stringstream text;
+                text << className << ": the checkpoint was written with a minimum moment of inertia of " << savedMoment <<
+                        " amu nm^2, this integrator has " << minimumMoment << "; its velocities are rigid motion with those "
+                        "moments, so load it into an integrator with the same one";
+                throw OpenMMException(text.str());
             }
         }
         stepState = saved;

@@ -545,7 +545,7 @@ def test_checkpoint_from_another_minimum_moment_is_refused(platform):
         readerContext = systems.make_context(cluster.system, reader, platform)
         readerContext.setPositions(cluster.positions)
         with pytest.raises(openmm.OpenMMException, match=r"RigidBodyIntegrator: the checkpoint was written with a minimum "
-                                                         r"moment of inertia of 0\.04.* this integrator has " + str(floor)):
+                                                         r"moment of inertia of 0\.04 amu nm\^2, this integrator has " + f"{floor:g};"):
             readerContext.loadCheckpoint(checkpoint)
         reader.step(2)
         assert np.all(np.isfinite(systems.positions_of(readerContext)))
