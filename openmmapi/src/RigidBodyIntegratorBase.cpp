@@ -592,19 +592,18 @@ void RigidBodyIntegratorBase::loadCheckpoint(istream& stream) {
     }
     loadedVelocityKick = getLoadedVelocityKick(version);
     // A checkpoint starts another run (or rewinds this one): the accuracy check starts again.
-    accuracyMonitor = AccuracyCheck();
-    accuracyMonitor.stateSet();
+    accuracyMonitor.rearm();
     forcesAreValid = false;
     needsProjection = true;
     restoredCheckpoint = false;
     if (!savedStates.empty()) {
         // Explicit bodies of a Context whose positions were never set take their shapes from these.
         captureShapes(currentGeometry(*context, *topology), false);
-    }
-    if (!savedStates.empty() && topology->allShapesKnown() && getKernel().setBodyStates(*context, savedStates)) {
-        needsProjection = false;
-        // The notices of the positions and velocities the load sends next are of this state: no fit.
-        restoredCheckpoint = true;
+        if (topology->allShapesKnown() && getKernel().setBodyStates(*context, savedStates)) {
+            needsProjection = false;
+            // The notices of the positions and velocities the load sends next are of this state: no fit.
+            restoredCheckpoint = true;
+        }
     }
 }
 
@@ -680,10 +679,8 @@ void RigidBodyIntegratorBase::step(int steps) {
         // Shadow work needs the potential energy the step starts from: the last step's, or evaluated here.
         // The accuracy check measures in episodes (internal/AccuracyCheck.h).
         // A run taken back to before the check fired (a State or checkpoint loaded) is judged again.
-        if (!accuracyMonitor.getMessage().empty() && context->getTime() < accuracyMonitor.getFiredTime()*(1.0 - 1e-12)) {
-            accuracyMonitor = AccuracyCheck();
-            accuracyMonitor.stateSet();
-        }
+        if (accuracyMonitor.firedAfter(context->getTime()))
+            accuracyMonitor.rearm();
         AccuracyCheck::Setting setting;
         if (accuracyCheck && !andersenThermostat) {
             setting = getAccuracySetting();

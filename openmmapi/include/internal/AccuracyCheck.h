@@ -95,9 +95,14 @@ public:
     const std::string& getMessage() const {
         return message;
     }
-    /** The time (ps) after the step in which the signal fired; infinite before. */
-    double getFiredTime() const {
-        return firedTime;
+    /** Whether the signal fired after this time (ps): a run taken back to before it is judged again (rearm()). */
+    bool firedAfter(double time) const {
+        return !message.empty() && time < firedTime*(1.0 - 1e-12);
+    }
+    /** Start afresh, as for a new run: no message, a new episode, windows from after the next step (stateSet()). */
+    void rearm() {
+        *this = AccuracyCheck();
+        stateSet();
     }
     /**
      * What is told when a check fires, once per firing: its message. It returns false to stop the
@@ -121,7 +126,7 @@ private:
     bool inEpisode = true, skipNext = false;
     double nextEpisode = 0.0;
     double lastFigure = std::numeric_limits<double>::quiet_NaN(), lastDrift = std::numeric_limits<double>::quiet_NaN(), lastTime = 0.0;
-    double firedTime = std::numeric_limits<double>::infinity();
+    double firedTime = 0.0;
     std::string message;
 };
 
