@@ -7,10 +7,12 @@
 #include "openmm/Vec3.h"
 #include "internal/AccuracyCheck.h"
 #include "internal/StepSequence.h"
+#include "internal/TimeStepLevels.h"
 #include "internal/windowsExportRigid.h"
 #include <iosfwd>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace OpenMMRigid {
@@ -152,6 +154,45 @@ public:
      * @throws OpenMMException if the moment is not between 0 and MaximumMinimumMoment, or the integrator is bound to a Context
      */
     void setMinimumMomentOfInertia(double moment);
+    /**
+     * Integrate some forces with a smaller step than others (multiple time steps, r-RESPA), in the
+     * convention of OpenMM's MTSLangevinIntegrator: a list of (force group, substeps) pairs, each group
+     * evaluated that many times per step. The slowest groups (1 substep) kick at the step's kicks; each
+     * faster level divides every drift of the level above into substeps / (the level above's substeps)
+     * substeps, kicking with its own forces around them. Put the cheap, stiff forces (the solute's
+     * bonds, angles, torsions and CMAP) in a fast group and the nonbonded forces in the slow one:
+     * the nonbonded forces are then evaluated once per step. Only what the fast forces reach moves in
+     * the substeps: a body none of whose particles a fast force acts on (every rigid water) drifts once
+     * per drift of the step, exactly as in pieces (free drifts compose), and pays nothing for them.
+     *
+     * RigidBodyLangevinIntegrator applies its Ornstein-Uhlenbeck stage once per step, at the midpoint
+     * of the nest (BAOAB with the inner levels inside the drifts); its velocities between steps then
+     * lack half a kick of the slowest forces only. The groups listed replace the integration force
+     * groups (setIntegrationForceGroups()): forces in groups not listed are not integrated. An empty
+     * list (the default) is one level of the integration force groups. Set it before the integrator
+     * is bound to a Context.
+     *
+     * @param groupSubsteps  (force group, substeps) pairs: groups 0 to 31, each once; the slowest
+     *                       groups' substeps must be 1, and each level's a multiple of the next
+     *                       slower one's
+     * @throws OpenMMException if the list breaks these rules, or the integrator is bound to a Context
+     */
+    void setForceGroupSubsteps(const std::vector<std::pair<int, int> >& groupSubsteps);
+    /** Get the (force group, substeps) pairs of setForceGroupSubsteps(), as given (empty: one level). */
+    const std::vector<std::pair<int, int> >& getForceGroupSubsteps() const {
+        return groupSubsteps;
+    }
+#ifndef SWIG
+    /**
+     * Set the force groups to integrate (OpenMM's Integrator::setIntegrationForceGroups()); with
+     * setForceGroupSubsteps() they are the groups it lists, and another set is refused.
+     */
+    void setIntegrationForceGroups(int groups) override;
+    /** The levels of the multiple time steps, slowest first (one level without them): valid while bound to a Context. */
+    const std::vector<TimeStepLevel>& getTimeStepLevels() const {
+        return levels;
+    }
+#endif
     /**
      * The largest minimum moment of inertia, in amu nm^2: 16,000 times the smallest moment of water.
      * Larger ones only slow the rotation further, while the rounding of each body's angular velocity
@@ -443,6 +484,8 @@ private:
     bool explicitBodies;
     RotationMethod rotationMethod;
     double minimumMoment;
+    std::vector<std::pair<int, int> > groupSubsteps;
+    std::vector<TimeStepLevel> levels;
     bool measureShadowWork, measureHeat, accuracyCheck, checkingStep;
     /** Whether the System has an AndersenThermostat (whose runs the accuracy check leaves alone). */
     bool andersenThermostat;

@@ -65,13 +65,25 @@ public:
      */
     virtual bool positionsAreCurrent(OpenMM::ContextImpl& context) const = 0;
     /**
-     * Stage: kick every body and free particle by the forces for a time `kick` (none if 0), then
-     * let it move freely for a time `drift` (see RigidBodyDynamics::kickAndDrift()).
+     * Keep a copy of the forces of the Context's last evaluation as force set `slot` (0, 1, ...), for
+     * the kicks of multiple time steps: each level's forces outlive the evaluations of the others. The
+     * copy is valid until the atoms are reordered, which a platform does only in beforeLastForces(),
+     * before the step's last evaluations (of every level).
      */
-    virtual void kickAndDrift(OpenMM::ContextImpl& context, double kick, double drift,
-                              RigidBodyOptions::RotationMethod method, double constraintTolerance) = 0;
-    /** Stage: the last kick of a step, then the rigid velocities written to the body particles. */
-    virtual void closingKick(OpenMM::ContextImpl& context, double kick, double constraintTolerance) = 0;
+    virtual void saveForces(OpenMM::ContextImpl& context, int slot) = 0;
+    /**
+     * Stage: kick the bodies of `set` and (unless set is SlowBodies) the free particles by the forces
+     * for a time `kick` (none if 0), then let them move freely for a time `drift` (none if 0: a kick
+     * alone; see RigidBodyDynamics::kickAndDrift()). The forces are the Context's last evaluation if
+     * `forces` is -1, else the set saveForces() kept in that slot.
+     */
+    virtual void kickAndDrift(OpenMM::ContextImpl& context, double kick, double drift, RigidBodyOptions::RotationMethod method,
+                              double constraintTolerance, int forces, BodySet set) = 0;
+    /**
+     * Stage: the last kick of a step (forces as for kickAndDrift()), then the rigid velocities of every
+     * body written to its particles and the constraints among free particles applied to their velocities.
+     */
+    virtual void closingKick(OpenMM::ContextImpl& context, double kick, double constraintTolerance, int forces) = 0;
     /**
      * Stage: the exact Ornstein-Uhlenbeck step of every momentum, with damping factor c, at thermal
      * energy kT, its deviates from the counter-based streams NormalStream(seed, stream, counter)
@@ -119,12 +131,12 @@ public:
     virtual void computeKineticEnergies(OpenMM::ContextImpl& context, double& translational, double& rotational) = 0;
     /**
      * The kinetic energy, split as computeKineticEnergies() splits it, that the momenta would have
-     * after a kick of `kick` by the forces the Context holds (each body's momentum by its force and its
+     * after a kick of `kick` by the forces (as for kickAndDrift()) (each body's momentum by its force and its
      * angular momentum by its torque; the free particles' velocities by their forces, then projected
      * onto the constraints among them to constraintTolerance), leaving the state as it is. The
      * bodies' momenta are those of the kernel's states: current after a step or a projection.
      */
-    virtual void computeKickedKineticEnergies(OpenMM::ContextImpl& context, double kick, double constraintTolerance,
+    virtual void computeKickedKineticEnergies(OpenMM::ContextImpl& context, double kick, double constraintTolerance, int forces,
                                               double& translational, double& rotational) = 0;
     /** The kinetic energy sum m v^2 / 2 over the massive particles. */
     virtual double computeKineticEnergy(OpenMM::ContextImpl& context) = 0;

@@ -144,9 +144,9 @@ void RigidBodyDynamics::forEachBody(HostLoop loop, const function<void(int)>& ta
     error.rethrow();
 }
 
-void RigidBodyDynamics::forEachBodyGroup(HostLoop loop, int size, const function<void(int begin, int end, FirstError& error)>& task) {
+void RigidBodyDynamics::forEachBodyGroup(HostLoop loop, int count, int size, const function<void(int begin, int end, FirstError& error)>& task) {
     FirstError error;
-    forEachRange(loop, states.size(), [&](int, int begin, int end) {
+    forEachRange(loop, count, [&](int, int begin, int end) {
         for (int first = begin; first < end; first += size)
             task(first, min(end, first + size), error);
     });
@@ -379,17 +379,19 @@ void RigidBodyDynamics::placeParticles(int b, vector<Vec3>& positions) const {
 
 void RigidBodyDynamics::kickAndDrift(vector<Vec3>& positions, vector<Vec3>& velocities, const vector<Vec3>& forces,
                                      double kick, double drift, RigidBodyOptions::RotationMethod method,
-                                     double constraintTolerance) {
+                                     double constraintTolerance, BodySet set) {
     requireConstraints();
-    const bool kicks = (kick != 0.0);
+    const bool kicks = (kick != 0.0), drifts = (drift != 0.0);
+    const vector<int>& bodies = system.getBodySet(set);
     // The bodies go in groups of RigidLanes: each is kicked and translated, then those that rotate
     // exactly turn together (rotateExactly), then the group's particles are placed. A body whose
     // kick or displacement check fails is left out of the rest of the step.
-    forEachBodyGroup(DriftLoop, RigidLanes, [&](int begin, int end, FirstError& error) {
+    forEachBodyGroup(DriftLoop, bodies.size(), RigidLanes, [&](int begin, int end, FirstError& error) {
         int exact[RigidLanes], numExact = 0;
         bool moved[RigidLanes];
-        for (int b = begin; b < end; b++) {
-            moved[b - begin] = error.guard([&]() {
+        for (int i = begin; i < end; i++) {
+            const int b = bodies[i];
+            moved[i - begin] = error.guard([&]() {
                 BodyState& state = states[b];
                 refreshMomenta(b, positions, velocities);
                 if (kicks) {
@@ -402,27 +404,34 @@ void RigidBodyDynamics::kickAndDrift(vector<Vec3>& positions, vector<Vec3>& velo
                     state.velocity = toVector(velocity);
                     state.angularMomentum = toVector(angularMomentum);
                 }
+                if (!drifts)
+                    return;
                 checkDisplacement("body", b, sqrt(state.velocity[0]*state.velocity[0] + state.velocity[1]*state.velocity[1] +
                                                   state.velocity[2]*state.velocity[2])*fabs(drift), drift);
                 for (int k = 0; k < 3; k++)
                     state.center[k] += drift*state.velocity[k];
-            });
-            if (moved[b - begin] && rotatesExactly(b, method))
+            }) && drifts;
+            if (moved[i - begin] && rotatesExactly(b, method))
                 exact[numExact++] = b;
-            else if (moved[b - begin] && system.getShape(b).kind != RigidKindPoint)
+            else if (moved[i - begin] && system.getShape(b).kind != RigidKindPoint)
                 rotateNoSquish(b, drift);
         }
         rotateExactly(numExact, exact, drift);
-        for (int b = begin; b < end; b++)
-            if (moved[b - begin])
-                placeParticles(b, positions);
+        for (int i = begin; i < end; i++)
+            if (moved[i - begin])
+                placeParticles(bodies[i], positions);
     });
+    if (set == SlowBodies)
+        return;
     const vector<int>& free = system.getFreeParticles();
     for (int p : free) {
         if (kicks)
             velocities[p] += forces[p]*(kick*inverseMasses[p]);
-        checkDisplacement("particle", p, sqrt(velocities[p].dot(velocities[p]))*fabs(drift), drift);
+        if (drifts)
+            checkDisplacement("particle", p, sqrt(velocities[p].dot(velocities[p]))*fabs(drift), drift);
     }
+    if (!drifts)
+        return;
     if (constraints)
         previousPositions = positions;
     for (int p : free)

@@ -4,6 +4,7 @@
 #include "internal/RigidBodyMolecules.h"
 #include "internal/RigidBodySystem.h"
 #include "internal/StepSequence.h"
+#include "internal/TimeStepLevels.h"
 #include "numerics/SymmetricEigen.h"
 #include "openmm/AndersenThermostat.h"
 #include "openmm/CompoundIntegrator.h"
@@ -125,6 +126,27 @@ void RigidBodyIntegratorBase::setMinimumMomentOfInertia(double moment) {
         throw OpenMMException(className + ": the minimum moment of inertia cannot change once the integrator is bound to a "
                 "Context (the bodies' moments are set then); set it before creating the Context");
     minimumMoment = moment;
+}
+
+void RigidBodyIntegratorBase::setForceGroupSubsteps(const vector<pair<int, int> >& substeps) {
+    if (bound && substeps != groupSubsteps)
+        throw OpenMMException(className + ": the force groups' substeps cannot change once the integrator is bound to a Context "
+                "(which bodies move in the substeps is found then); set them before creating the Context");
+    const vector<TimeStepLevel> checked = timeStepLevels(substeps, getIntegrationForceGroups(), className);
+    groupSubsteps = substeps;
+    if (!substeps.empty()) {
+        int groups = 0;
+        for (const TimeStepLevel& level : checked)
+            groups |= level.groups;
+        Integrator::setIntegrationForceGroups(groups);
+    }
+}
+
+void RigidBodyIntegratorBase::setIntegrationForceGroups(int groups) {
+    if (!groupSubsteps.empty() && groups != getIntegrationForceGroups())
+        throw OpenMMException(className + ": the integration force groups are those setForceGroupSubsteps() lists; change "
+                "them there (or call setForceGroupSubsteps([]) first)");
+    Integrator::setIntegrationForceGroups(groups);
 }
 
 RigidBodyIntegratorBase::~RigidBodyIntegratorBase() {
@@ -360,6 +382,13 @@ void RigidBodyIntegratorBase::initialize(ContextImpl& contextRef) {
             throw OpenMMException(className + ": raised moments of inertia (setMinimumMomentOfInertia()) cannot be used in a "
                     "CompoundIntegrator, whose setVelocitiesToTemperature() and other integrators use the particles' own moments; "
                     "use this integrator on its own");
+        levels = timeStepLevels(groupSubsteps, getIntegrationForceGroups(), className);
+        if (levels.size() > 1) {
+            int fastGroups = 0;
+            for (size_t l = 1; l < levels.size(); l++)
+                fastGroups |= levels[l].groups;
+            topology->setFastBodies(particlesReachedBy(contextRef.getSystem(), fastGroups));
+        }
         try {
             kernel = context->getPlatform().createKernel(IntegrateRigidBodyStepKernel::Name(), contextRef);
         }
@@ -401,8 +430,9 @@ void RigidBodyIntegratorBase::cleanup() {
 void RigidBodyIntegratorBase::applyLoadedVelocityKick() {
     if (loadedVelocityKick == 0.0)
         return;
-    context->calcForcesAndEnergy(true, false, getIntegrationForceGroups());
-    getKernel().closingKick(*context, loadedVelocityKick, getConstraintTolerance());
+    // With multiple time steps the velocities lack half a kick of the slowest forces only.
+    context->calcForcesAndEnergy(true, false, levels.size() > 1 ? levels[0].groups : getIntegrationForceGroups());
+    getKernel().closingKick(*context, loadedVelocityKick, getConstraintTolerance(), -1);
     loadedVelocityKick = 0.0;
 }
 
@@ -623,14 +653,23 @@ bool RigidBodyIntegratorBase::makeBodiesCurrent(Vec3* box) {
         forcesAreValid = false;
         getKernel().boxChanged(*context);
     }
-    // A getState() of other force groups overwrites the forces.
-    if (context->getLastForceGroups() != getIntegrationForceGroups())
+    // A getState() of other force groups overwrites the forces (multiple time steps keep their own copies).
+    if (levels.size() == 1 && context->getLastForceGroups() != getIntegrationForceGroups())
         forcesAreValid = false;
     return forcesAreValid;
 }
 
 void RigidBodyIntegratorBase::evaluateForces(const Vec3* box, bool energy) {
-    stepState.potentialEnergy = context->calcForcesAndEnergy(true, energy, getIntegrationForceGroups());
+    if (levels.size() == 1)
+        stepState.potentialEnergy = context->calcForcesAndEnergy(true, energy, getIntegrationForceGroups());
+    else {
+        // Each level's forces kept in its slot (IntegrateRigidBodyStepKernel::saveForces()).
+        stepState.potentialEnergy = 0.0;
+        for (size_t l = 0; l < levels.size(); l++) {
+            stepState.potentialEnergy += context->calcForcesAndEnergy(true, energy, levels[l].groups);
+            getKernel().saveForces(*context, l);
+        }
+    }
     stepState.potentialKnown = energy;
     forcesAreValid = true;
     for (int k = 0; k < 3; k++)
@@ -644,7 +683,9 @@ double RigidBodyIntegratorBase::computeKickedKineticEnergy(double kick, const st
     if (!makeBodiesCurrent(box))
         evaluateForces(box, false);
     double translational, rotational;
-    getKernel().computeKickedKineticEnergies(*context, kick, getConstraintTolerance(), translational, rotational);
+    // With multiple time steps the velocities lack half a kick of the slowest forces only (slot 0).
+    getKernel().computeKickedKineticEnergies(*context, kick, getConstraintTolerance(), levels.size() > 1 ? 0 : -1, translational,
+                                             rotational);
     return translational + rotational;
 }
 

@@ -458,6 +458,20 @@ RigidBodySystem::RigidBodySystem(const System& system, const vector<vector<int> 
         }
     }
     largestCutoff = (cutoff > 0.0 ? cutoff : numeric_limits<double>::infinity());
+    for (int b = 0; b < getNumBodies(); b++) {
+        bodySets[AllBodies].push_back(b);
+        bodySets[FastBodies].push_back(b);
+    }
+}
+
+void RigidBodySystem::setFastBodies(const vector<char>& reached) {
+    bodySets[FastBodies].clear();
+    bodySets[SlowBodies].clear();
+    for (int b = 0; b < getNumBodies(); b++) {
+        const int* members = getBodyParticles(b);
+        const bool fast = any_of(members, members + getBodySize(b), [&](int p) { return reached[p] != 0; });
+        bodySets[fast ? FastBodies : SlowBodies].push_back(b);
+    }
 }
 
 void RigidBodySystem::findConstraintBodies(const System& system, vector<vector<double> >& pairDistances) {

@@ -3,6 +3,7 @@
 #include "RigidBodyKernels.h"
 #include "RigidBodyLangevinIntegrator.h"
 #include "internal/Splitting.h"
+#include "internal/TimeStepLevels.h"
 #include "numerics/Philox.h"
 #include "numerics/StochasticRescaling.h"
 #include "openmm/Context.h"
@@ -10,6 +11,7 @@
 #include "openmm/reference/SimTKOpenMMRealType.h"
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <random>
 #include <string>
 
@@ -56,6 +58,86 @@ double startingEnergy(ContextImpl& context, IntegrateRigidBodyStepKernel& kernel
     return kineticEnergy(context, kernel) + state.potentialEnergy;
 }
 
+
+/**
+ * The inner levels of multiple time steps (internal/TimeStepLevels.h): within a drift of the level
+ * above, each level l >= 1 takes r_l = substeps_l / substeps_{l-1} substeps of h, each
+ * kick_l(h/2) [drift of the level below, or the free drift] kick_l(h/2), with its forces evaluated at
+ * the end of each substep (kept in slot l, so that the evaluations of the other levels do not replace
+ * them). The kicks of one level at the same positions are joined (kick_l(h) between substeps). Only
+ * the bodies a fast force reaches (and the free particles) take part: the others drift once over the
+ * outermost drift, exactly as in pieces (free drifts compose). This is RESPA (M. Tuckerman, B. J. Berne
+ * and G. J. Martyna, J. Chem. Phys. 97, 1990 (1992)) with exact rigid-body drifts.
+ */
+class InnerLevels {
+public:
+    InnerLevels(ContextImpl& context, IntegrateRigidBodyStepKernel& kernel, const vector<TimeStepLevel>& levels,
+                RigidBodyOptions::RotationMethod method, double tolerance, bool measure) :
+            context(context), kernel(kernel), levels(levels), method(method), tolerance(tolerance), measure(measure) {
+    }
+    /** Evaluate level l's forces at the current positions and keep them in slot l; their energy, if asked for (else 0). */
+    double evaluate(int l, bool energy) {
+        const double potential = evaluateForces(context, levels[l].groups, energy);
+        kernel.saveForces(context, l);
+        return potential;
+    }
+    /**
+     * A drift of time T of the level above l (level l and those below it kicking inside it). If
+     * `middle` is given, it is called at the drift's midpoint (between the kicks there, or halfway
+     * through a free drift). If `last`, the drift ends the step: `atEnd` (if given) is called after the
+     * last free drift, the platform is told before the first of the final evaluations
+     * (beforeLastForces()), and the potential energy of levels l and below at the end is returned
+     * if measured (else 0).
+     */
+    double drift(int l, double T, const function<void()>* middle, bool last, const function<void()>* atEnd) {
+        const int r = levels[l].substeps/levels[l - 1].substeps;
+        const double h = T/r;
+        const bool innermost = (l == (int) levels.size() - 1);
+        double potential = 0.0;
+        for (int k = 0; k < r; k++) {
+            const bool lastSubstep = last && k == r - 1;
+            double opening = (k == 0 ? 0.5*h : h);
+            if (middle != NULL && r%2 == 0 && k == r/2) {
+                // The midpoint falls between two substeps: after every kick that closes the first half.
+                kernel.kickAndDrift(context, 0.5*h, 0.0, method, tolerance, l, FastBodies);
+                (*middle)();
+                opening = 0.5*h;
+            }
+            const function<void()>* inside = (middle != NULL && r%2 == 1 && k == r/2 ? middle : NULL);
+            if (innermost) {
+                if (inside != NULL) {
+                    kernel.kickAndDrift(context, opening, 0.5*h, method, tolerance, l, FastBodies);
+                    (*inside)();
+                    kernel.kickAndDrift(context, 0.0, 0.5*h, method, tolerance, l, FastBodies);
+                }
+                else
+                    kernel.kickAndDrift(context, opening, h, method, tolerance, l, FastBodies);
+                if (lastSubstep) {
+                    if (atEnd != NULL)
+                        (*atEnd)();
+                    kernel.beforeLastForces(context);
+                }
+            }
+            else {
+                kernel.kickAndDrift(context, opening, 0.0, method, tolerance, l, FastBodies);
+                potential += drift(l + 1, h, inside, lastSubstep, atEnd);
+            }
+            const double energy = evaluate(l, lastSubstep && measure);
+            if (lastSubstep)
+                potential += energy;
+        }
+        kernel.kickAndDrift(context, 0.5*h, 0.0, method, tolerance, l, FastBodies);
+        return potential;
+    }
+private:
+    ContextImpl& context;
+    IntegrateRigidBodyStepKernel& kernel;
+    const vector<TimeStepLevel>& levels;
+    RigidBodyOptions::RotationMethod method;
+    double tolerance;
+    bool measure;
+};
+
 } // namespace
 
 uint64_t chooseRandomSeed(int requested) {
@@ -94,14 +176,32 @@ void stepRigidBodyIntegrator(ContextImpl& context, IntegrateRigidBodyStepKernel&
     // the Context holds, and every drift is followed by a force evaluation. Only the last one needs
     // the energy for the shadow work: the kicks and drifts in between telescope.
     double potential = 0.0;
-    for (int stage = 0; stage < scheme.numDrifts; stage++) {
-        kernel.kickAndDrift(context, scheme.kicks[stage]*dt, scheme.drifts[stage]*dt, method, tolerance);
-        const bool last = (stage == scheme.numDrifts - 1);
-        if (last)
-            kernel.beforeLastForces(context);
-        potential = evaluateForces(context, integrator.getIntegrationForceGroups(), last && measureShadowWork);
+    const vector<TimeStepLevel>& levels = integrator.getTimeStepLevels();
+    if (levels.size() == 1) {
+        for (int stage = 0; stage < scheme.numDrifts; stage++) {
+            kernel.kickAndDrift(context, scheme.kicks[stage]*dt, scheme.drifts[stage]*dt, method, tolerance, -1, AllBodies);
+            const bool last = (stage == scheme.numDrifts - 1);
+            if (last)
+                kernel.beforeLastForces(context);
+            potential = evaluateForces(context, integrator.getIntegrationForceGroups(), last && measureShadowWork);
+        }
+        kernel.closingKick(context, scheme.kicks[scheme.numDrifts]*dt, tolerance, -1);
     }
-    kernel.closingKick(context, scheme.kicks[scheme.numDrifts]*dt, tolerance);
+    else {
+        // Multiple time steps: the splitting's kicks with the slowest forces (slot 0), each of its
+        // drifts the nest of the faster levels (InnerLevels), in which the bodies no fast force
+        // reaches drift once, whole, with their kick.
+        InnerLevels inner(context, kernel, levels, method, tolerance, measureShadowWork);
+        for (int stage = 0; stage < scheme.numDrifts; stage++) {
+            const double kick = scheme.kicks[stage]*dt, drift = scheme.drifts[stage]*dt;
+            const bool last = (stage == scheme.numDrifts - 1);
+            kernel.kickAndDrift(context, kick, drift, method, tolerance, 0, SlowBodies);
+            kernel.kickAndDrift(context, kick, 0.0, method, tolerance, 0, FastBodies);
+            potential = inner.drift(1, drift, NULL, last, NULL);
+            potential += inner.evaluate(0, last && measureShadowWork);
+        }
+        kernel.closingKick(context, scheme.kicks[scheme.numDrifts]*dt, tolerance, 0);
+    }
     double kinetic = 0.0;
     if (integrator.hasThermostat()) {
         // Bussi, Donadio and Parrinello, J. Chem. Phys. 126, 014101 (2007), eq. (A7): one global
@@ -151,11 +251,10 @@ void stepRigidBodyLangevinIntegrator(ContextImpl& context, IntegrateRigidBodySte
     // (getVelocityTimeOffset() = dt/2), whose distribution is canonical where BAOAB's on-step
     // velocities read stiff modes (the librations of water) cold. With no friction O is the
     // identity and is left out: the step is then leapfrog Verlet with exact drifts.
-    kernel.kickAndDrift(context, dt, 0.5*dt, method, tolerance);
     double heat = 0.0;
-    if (friction > 0.0) {
-        // The heat is the kinetic energy the O stage adds: read on either side of it, with the
-        // bodies' momenta written to their particles first (which changes no momentum).
+    // The O stage, where the heat is the kinetic energy it adds: read on either side of it, with the
+    // bodies' momenta written to their particles first (which changes no momentum).
+    const function<void()> thermostat = [&]() {
         const bool measure = (measureShadowWork || measureHeat);
         if (measure) {
             kernel.writeBodyVelocities(context);
@@ -166,12 +265,34 @@ void stepRigidBodyLangevinIntegrator(ContextImpl& context, IntegrateRigidBodySte
             kernel.writeBodyVelocities(context);
             heat += kineticEnergy(context, kernel);
         }
+    };
+    double potential;
+    const vector<TimeStepLevel>& levels = integrator.getTimeStepLevels();
+    if (levels.size() == 1) {
+        kernel.kickAndDrift(context, dt, 0.5*dt, method, tolerance, -1, AllBodies);
+        if (friction > 0.0)
+            thermostat();
+        kernel.kickAndDrift(context, 0.0, 0.5*dt, method, tolerance, -1, AllBodies);
+        kernel.beforeLastForces(context);
+        potential = evaluateForces(context, integrator.getIntegrationForceGroups(), measureShadowWork);
     }
-    kernel.kickAndDrift(context, 0.0, 0.5*dt, method, tolerance);
-    kernel.beforeLastForces(context);
-    const double potential = evaluateForces(context, integrator.getIntegrationForceGroups(), measureShadowWork);
+    else {
+        // Multiple time steps: the kick by the slowest forces (slot 0), then the nest of the faster
+        // levels over the whole drift with O at its midpoint (so that, as in BAOAB, what the fast
+        // forces do not reach sees one O between two half drifts); the bodies no fast force reaches
+        // drift in two halves around it. The velocities between steps lack half a kick of the
+        // slowest forces only.
+        InnerLevels inner(context, kernel, levels, method, tolerance, measureShadowWork);
+        kernel.kickAndDrift(context, dt, 0.5*dt, method, tolerance, 0, SlowBodies);
+        kernel.kickAndDrift(context, dt, 0.0, method, tolerance, 0, FastBodies);
+        const function<void()> secondHalf = [&]() {
+            kernel.kickAndDrift(context, 0.0, 0.5*dt, method, tolerance, 0, SlowBodies);
+        };
+        potential = inner.drift(1, dt, friction > 0.0 ? &thermostat : NULL, true, &secondHalf);
+        potential += inner.evaluate(0, measureShadowWork);
+    }
     // No kick: the rigid velocities written to the body particles, the constraints among free particles applied to velocities.
-    kernel.closingKick(context, 0.0, tolerance);
+    kernel.closingKick(context, 0.0, tolerance, -1);
     if (measureHeat)
         state.heat += heat;
     if (measureShadowWork) {

@@ -101,6 +101,43 @@ bool bodiesFromPython(PyObject* input, std::vector<std::vector<int> >& bodies) {
     return ok;
 }
 
+/**
+ * Convert an iterable of (force group, substeps) pairs of integers to setForceGroupSubsteps()'s list.
+ * On failure raise openmm.OpenMMException naming the entry and return false. Ranges are the C++ setter's to check.
+ */
+bool groupSubstepsFromPython(PyObject* input, std::vector<std::pair<int, int> >& substeps) {
+    const std::string usage = "setForceGroupSubsteps: give a list of (force group, substeps) pairs of ints, such as [(0, 1), (1, 4)]";
+    PyObject* outer = (PyUnicode_Check(input) || PyBytes_Check(input)) ? NULL : PySequence_Fast(input, "");
+    if (outer == NULL) {
+        PyErr_Clear();
+        raiseOpenMMException(usage + "; got " + pythonRepr(input));
+        return false;
+    }
+    bool ok = true;
+    substeps.clear();
+    for (Py_ssize_t i = 0; ok && i < PySequence_Fast_GET_SIZE(outer); i++) {
+        PyObject* entry = PySequence_Fast_GET_ITEM(outer, i);
+        PyObject* pair = (PyUnicode_Check(entry) || PyBytes_Check(entry)) ? NULL : PySequence_Fast(entry, "");
+        long values[2] = {0, 0};
+        ok = (pair != NULL && PySequence_Fast_GET_SIZE(pair) == 2);
+        for (int k = 0; ok && k < 2; k++) {
+            PyObject* index = PyNumber_Index(PySequence_Fast_GET_ITEM(pair, k));
+            values[k] = index == NULL ? -1 : PyLong_AsLong(index);
+            ok = (index != NULL && !PyErr_Occurred() && values[k] >= INT_MIN && values[k] <= INT_MAX);
+            Py_XDECREF(index);
+        }
+        Py_XDECREF(pair);
+        if (!ok) {
+            PyErr_Clear();
+            raiseOpenMMException(usage + "; entry " + std::to_string(i) + " is " + pythonRepr(entry));
+            break;
+        }
+        substeps.push_back({(int) values[0], (int) values[1]});
+    }
+    Py_DECREF(outer);
+    return ok;
+}
+
 PyObject* intListToPython(const std::vector<int>& values) {
     PyObject* list = PyList_New(values.size());
     for (std::size_t i = 0; list != NULL && i < values.size(); i++)
@@ -161,6 +198,22 @@ RigidBodyLangevinIntegrator* asRigidBodyLangevinIntegrator(OpenMM::Integrator* i
         SWIG_fail;
     $1 = &converted;
 }
+%typemap(typecheck, precedence=SWIG_TYPECHECK_POINTER) const std::vector<std::pair<int, int> >& groupSubsteps {
+    $1 = 1;
+}
+%typemap(in) const std::vector<std::pair<int, int> >& groupSubsteps (std::vector<std::pair<int, int> > converted) {
+    if (!groupSubstepsFromPython($input, converted))
+        SWIG_fail;
+    $1 = &converted;
+}
+%typemap(out) const std::vector<std::pair<int, int> >& {
+    $result = PyList_New($1->size());
+    for (std::size_t i = 0; $result != NULL && i < $1->size(); i++)
+        PyList_SET_ITEM($result, i, Py_BuildValue("(ii)", (*$1)[i].first, (*$1)[i].second));
+    if ($result == NULL)
+        SWIG_fail;
+}
+%typemap(doctype) const std::vector<std::pair<int, int> >& "list of (int, int)"
 %typemap(out) std::vector<int> {
     $result = intListToPython($1);
     if ($result == NULL)

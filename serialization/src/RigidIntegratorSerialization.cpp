@@ -29,6 +29,11 @@ void serializeRigidIntegratorBase(const RigidBodyIntegratorBase& integrator, Ser
     node.setBoolProperty("measureShadowWork", integrator.getMeasureShadowWork());
     node.setBoolProperty("measureHeat", integrator.getMeasureHeat());
     node.setBoolProperty("accuracyCheck", integrator.getAccuracyCheck());
+    if (!integrator.getForceGroupSubsteps().empty()) {
+        SerializationNode& substeps = node.createChildNode("ForceGroupSubsteps");
+        for (const pair<int, int>& entry : integrator.getForceGroupSubsteps())
+            substeps.createChildNode("Group").setIntProperty("group", entry.first).setIntProperty("substeps", entry.second);
+    }
     if (integrator.hasExplicitBodies()) {
         SerializationNode& bodies = node.createChildNode("Bodies");
         for (const vector<int>& body : integrator.getExplicitBodies()) {
@@ -65,6 +70,12 @@ void deserializeRigidIntegratorSettings(const SerializationNode& node, RigidBody
     integrator.setMeasureShadowWork(node.getBoolProperty("measureShadowWork", integrator.getMeasureShadowWork()));
     integrator.setMeasureHeat(node.getBoolProperty("measureHeat", integrator.getMeasureHeat()));
     integrator.setAccuracyCheck(node.getBoolProperty("accuracyCheck", integrator.getAccuracyCheck()));
+    if (const SerializationNode* substepsNode = findChild(node, "ForceGroupSubsteps")) {
+        vector<pair<int, int> > substeps;
+        for (const SerializationNode& group : substepsNode->getChildren())
+            substeps.push_back({group.getIntProperty("group"), group.getIntProperty("substeps")});
+        integrator.setForceGroupSubsteps(substeps);
+    }
 }
 
 } // namespace OpenMMRigid

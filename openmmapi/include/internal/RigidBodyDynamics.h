@@ -140,13 +140,15 @@ public:
      * the particles.
      *
      * @param kick                 the time by which the forces change the momenta, in ps (0: forces not read)
-     * @param drift                the time of the free motion, in ps (may be negative)
+     * @param drift                the time of the free motion, in ps (may be negative; 0: a kick alone,
+     *                             which neither moves nor constrains anything)
      * @param method               how the bodies rotate during the drift
      * @param constraintTolerance  the tolerance of the constraints among free particles
+     * @param set                  the bodies that take part (the free particles take part unless it is SlowBodies)
      */
     void kickAndDrift(std::vector<OpenMM::Vec3>& positions, std::vector<OpenMM::Vec3>& velocities,
                       const std::vector<OpenMM::Vec3>& forces, double kick, double drift,
-                      RigidBodyOptions::RotationMethod method, double constraintTolerance);
+                      RigidBodyOptions::RotationMethod method, double constraintTolerance, BodySet set = AllBodies);
     /**
      * The Ornstein-Uhlenbeck stage of a Langevin step: the exact solution, over the time whose
      * damping factor is c, of dp = -gamma p dt + sqrt(2 gamma m kT) dW for every momentum p with
@@ -304,7 +306,7 @@ private:
      * Run task(begin, end, error) for consecutive groups of at most `size` bodies, on the threads where
      * they pay; the task guards each body's work with `error`, whose first exception is rethrown here.
      */
-    void forEachBodyGroup(HostLoop loop, int size, const std::function<void(int begin, int end, FirstError& error)>& task);
+    void forEachBodyGroup(HostLoop loop, int count, int size, const std::function<void(int begin, int end, FirstError& error)>& task);
     /**
      * Run task(thread, begin, end) over 0 ... count - 1: split into one contiguous range per thread
      * where the loop's ThreadedLoopChoice says the threads are faster, else serially as one range

@@ -47,6 +47,18 @@ struct StepGeometry {
  * constraint between a body and anything else) is an OpenMMException that names the integrator's
  * class, the body and the particle.
  */
+/**
+ * Which bodies a stage of a step moves, with multiple time steps (RigidBodySystem::setFastBodies()):
+ * every body, the bodies a fast force reaches, or those it does not (which drift once over each drift
+ * of the outermost level, since free drifts compose). The free particles move with AllBodies and
+ * FastBodies.
+ */
+enum BodySet {
+    AllBodies = 0,
+    FastBodies = 1,
+    SlowBodies = 2
+};
+
 class OPENMM_EXPORT_RIGID RigidBodySystem {
 public:
     /**
@@ -184,6 +196,16 @@ public:
     const std::vector<int>& getFreeParticles() const {
         return freeParticles;
     }
+    /**
+     * Sort the bodies into fast ones (a particle of which the fast forces reach: `reached`, per particle,
+     * from particlesReachedBy()) and slow ones, for the stages of multiple time steps (getBodySet()).
+     * Before it every body is fast.
+     */
+    void setFastBodies(const std::vector<char>& reached);
+    /** The bodies of a set, by index, ascending (AllBodies: 0 to getNumBodies() - 1). */
+    const std::vector<int>& getBodySet(BodySet set) const {
+        return bodySets[set];
+    }
     /** For each particle, the body it belongs to, or -1. */
     const std::vector<int>& getBodyOfParticle() const {
         return bodyOfParticle;
@@ -263,6 +285,7 @@ private:
     int numFreeConstraints = 0;
     bool removesCenterOfMassMotion = false;
     double largestCutoff;
+    std::vector<int> bodySets[3];
 };
 
 } // namespace OpenMMRigid

@@ -42,9 +42,10 @@ public:
     void project(OpenMM::ContextImpl& context) override;
     void projectVelocities(OpenMM::ContextImpl& context) override;
     bool positionsAreCurrent(OpenMM::ContextImpl& context) const override;
+    void saveForces(OpenMM::ContextImpl& context, int slot) override;
     void kickAndDrift(OpenMM::ContextImpl& context, double kick, double drift, RigidBodyOptions::RotationMethod method,
-                      double constraintTolerance) override;
-    void closingKick(OpenMM::ContextImpl& context, double kick, double constraintTolerance) override;
+                      double constraintTolerance, int forces, BodySet set) override;
+    void closingKick(OpenMM::ContextImpl& context, double kick, double constraintTolerance, int forces) override;
     void thermalize(OpenMM::ContextImpl& context, double c, double kT, uint64_t seed, uint64_t counter,
                     double constraintTolerance) override;
     void writeBodyVelocities(OpenMM::ContextImpl& context) override;
@@ -52,8 +53,8 @@ public:
     void getRescalingEnergies(OpenMM::ContextImpl& context, double& kinetic, double& newKinetic) override;
     double takeThermostatWork(OpenMM::ContextImpl& context) override;
     void computeKineticEnergies(OpenMM::ContextImpl& context, double& translational, double& rotational) override;
-    void computeKickedKineticEnergies(OpenMM::ContextImpl& context, double kick, double constraintTolerance, double& translational,
-                                      double& rotational) override;
+    void computeKickedKineticEnergies(OpenMM::ContextImpl& context, double kick, double constraintTolerance, int forces,
+                                      double& translational, double& rotational) override;
     double computeKineticEnergy(OpenMM::ContextImpl& context) override;
     void beforeLastForces(OpenMM::ContextImpl& context) override;
     void boxChanged(OpenMM::ContextImpl& context) override;

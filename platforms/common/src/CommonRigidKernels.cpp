@@ -137,6 +137,19 @@ struct CommonIntegrateRigidBodyStepKernel::Impl {
     /** Whether a rescaling ran since the work was last taken, and whether the device's sum holds only work already taken. */
     bool workPending = false, restartWork = false;
     ComputeArray startStates, startPosq, startPosqCorrection, startVelm;
+    /** The bodies of each BodySet, by index (RigidBodySystem::getBodySet()), and how many each has. */
+    ComputeArray bodySets[3];
+    int bodySetSize[3] = {0, 0, 0};
+    /** The force sets of saveForces(), by slot, each a copy of the platform's force buffer. */
+    vector<ComputeArray> savedForces;
+    /** The Context's forces (-1) or those saveForces() kept in a slot. */
+    ArrayInterface& forceSet(int forces) {
+        if (forces < 0)
+            return cc.getLongForceBuffer();
+        if (forces >= (int) savedForces.size() || !savedForces[forces].isInitialized())
+            throw OpenMMException("internal error: no forces were saved in slot " + to_string(forces));
+        return savedForces[forces];
+    }
     ComputeKernel updateAtomOrder, recordVelocities, kickDrift, kickDriftFree, finishFreeDrift, closingKick, kickFree;
     ComputeKernel thermalizeBodies, thermalizeFree, scaleBodies, scaleFree, kineticEnergies, sumPairs, sumRescale, fitTranslation;
     ComputeKernel projectBodyVelocities, kickedKineticEnergies;
@@ -463,6 +476,14 @@ void CommonIntegrateRigidBodyStepKernel::initialize(ContextImpl& context, RigidB
     d.kickDrift->addArg(d.errorCode);
     d.kickDrift->addArg(d.errorData);
     d.kickDrift->addArg(d.inertiaScale);
+    for (int set = 0; set < 3; set++) {
+        vector<int> list = bodies.getBodySet((BodySet) set);
+        d.bodySetSize[set] = list.size();
+        list.resize(max<size_t>(1, list.size()), 0);
+        d.bodySets[set].initialize<int>(cc, list.size(), "rigidBodySet");
+        d.bodySets[set].upload(list);
+    }
+    d.kickDrift->addArg(d.bodySets[AllBodies]);  // bodyList (22)
 
     d.solver.reset(bodies.getFreeConstraintSystem() != nullptr ? makeSolver(*bodies.getFreeConstraintSystem()) : nullptr);
     d.kickDriftFree = program->createKernel("rigidKickDriftFree");
@@ -728,19 +749,36 @@ bool CommonIntegrateRigidBodyStepKernel::positionsAreCurrent(ContextImpl& contex
     return impl->written && impl->writtenStep == cc.getStepCount();
 }
 
+void CommonIntegrateRigidBodyStepKernel::saveForces(ContextImpl& context, int slot) {
+    Impl& d = *impl;
+    ContextSelector selector(cc);
+    if (slot >= (int) d.savedForces.size())
+        d.savedForces.resize(slot + 1);
+    ArrayInterface& force = cc.getLongForceBuffer();
+    if (!d.savedForces[slot].isInitialized())
+        d.savedForces[slot].initialize(cc, force.getSize(), force.getElementSize(), "rigidSavedForces");
+    force.copyTo(d.savedForces[slot]);
+}
+
 void CommonIntegrateRigidBodyStepKernel::kickAndDrift(ContextImpl& context, double kick, double drift,
-                                                      RigidBodyOptions::RotationMethod method, double constraintTolerance) {
+                                                      RigidBodyOptions::RotationMethod method, double constraintTolerance,
+                                                      int forces, BodySet set) {
     Impl& d = *impl;
     ContextSelector selector(cc);
     const double limit = d.geometry.displacementLimit;
-    if (d.numBodies > 0) {
+    ArrayInterface& force = d.forceSet(forces);
+    if (d.bodySetSize[set] > 0) {
+        d.kickDrift->setArg(0, d.bodySetSize[set]);
+        d.kickDrift->setArg(13, force);
         d.kickDrift->setArg(15, kick);
         d.kickDrift->setArg(16, drift);
         d.kickDrift->setArg(17, (int) (method == RigidBodyOptions::NoSquish));
         d.kickDrift->setArg(18, limit);
-        d.kickDrift->execute(d.numBodies);
+        d.kickDrift->setArg(22, d.bodySets[set]);
+        d.kickDrift->execute(d.bodySetSize[set]);
     }
-    if (d.numFree > 0) {
+    if (d.numFree > 0 && set != SlowBodies && drift != 0.0) {
+        d.kickDriftFree->setArg(6, force);
         d.kickDriftFree->setArg(8, kick);
         d.kickDriftFree->setArg(9, drift);
         d.kickDriftFree->setArg(10, limit);
@@ -752,16 +790,25 @@ void CommonIntegrateRigidBodyStepKernel::kickAndDrift(ContextImpl& context, doub
             d.finishFreeDrift->execute(d.numFree);
         }
     }
+    else if (d.numFree > 0 && set != SlowBodies && kick != 0.0) {
+        // A kick alone: no drift, no constraint.
+        d.kickFree->setArg(4, force);
+        d.kickFree->setArg(6, kick);
+        d.kickFree->execute(d.numFree);
+    }
 }
 
-void CommonIntegrateRigidBodyStepKernel::closingKick(ContextImpl& context, double kick, double constraintTolerance) {
+void CommonIntegrateRigidBodyStepKernel::closingKick(ContextImpl& context, double kick, double constraintTolerance, int forces) {
     Impl& d = *impl;
     ContextSelector selector(cc);
+    ArrayInterface& force = d.forceSet(forces);
     if (d.numBodies > 0) {
+        d.closingKick->setArg(10, force);
         d.closingKick->setArg(12, kick);
         d.closingKick->execute(d.numBodies);
     }
     if (d.numFree > 0 && kick != 0.0) {
+        d.kickFree->setArg(4, force);
         d.kickFree->setArg(6, kick);
         d.kickFree->execute(d.numFree);
     }
@@ -862,9 +909,10 @@ void CommonIntegrateRigidBodyStepKernel::computeKineticEnergies(ContextImpl& con
 }
 
 void CommonIntegrateRigidBodyStepKernel::computeKickedKineticEnergies(ContextImpl& context, double kick, double constraintTolerance,
-                                                                      double& translational, double& rotational) {
+                                                                      int forces, double& translational, double& rotational) {
     Impl& d = *impl;
     ContextSelector selector(cc);
+    ArrayInterface& force = d.forceSet(forces);
     translational = rotational = 0.0;
     if (d.numBodies + d.numFree == 0)
         return;
@@ -873,11 +921,13 @@ void CommonIntegrateRigidBodyStepKernel::computeKickedKineticEnergies(ContextImp
         if (!d.savedVelm.isInitialized())
             d.savedVelm.initialize(cc, cc.getVelm().getSize(), cc.getVelm().getElementSize(), "rigidSavedVelm");
         cc.getVelm().copyTo(d.savedVelm);
+        d.kickFree->setArg(4, force);
         d.kickFree->setArg(6, kick);
         d.kickFree->execute(d.numFree);
         if (d.solver)
             d.solver->applyVelocityConstraints(constraintTolerance);
     }
+    d.kickedKineticEnergies->setArg(11, force);
     d.kickedKineticEnergies->setArg(14, kick);
     d.kickedKineticEnergies->execute(d.numBodies + d.numFree);
     d.sumEnergies(translational, rotational);

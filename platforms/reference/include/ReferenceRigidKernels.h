@@ -27,22 +27,25 @@ public:
     void project(OpenMM::ContextImpl& context);
     void projectVelocities(OpenMM::ContextImpl& context);
     bool positionsAreCurrent(OpenMM::ContextImpl& context) const;
+    void saveForces(OpenMM::ContextImpl& context, int slot);
     void kickAndDrift(OpenMM::ContextImpl& context, double kick, double drift, RigidBodyOptions::RotationMethod method,
-                      double constraintTolerance);
-    void closingKick(OpenMM::ContextImpl& context, double kick, double constraintTolerance);
+                      double constraintTolerance, int forces, BodySet set);
+    void closingKick(OpenMM::ContextImpl& context, double kick, double constraintTolerance, int forces);
     void thermalize(OpenMM::ContextImpl& context, double c, double kT, uint64_t seed, uint64_t counter, double constraintTolerance);
     void writeBodyVelocities(OpenMM::ContextImpl& context);
     void rescaleMomenta(OpenMM::ContextImpl& context, double targetKinetic, int dof, double c, double r1, double rest);
     void getRescalingEnergies(OpenMM::ContextImpl& context, double& kinetic, double& newKinetic);
     double takeThermostatWork(OpenMM::ContextImpl& context);
     void computeKineticEnergies(OpenMM::ContextImpl& context, double& translational, double& rotational);
-    void computeKickedKineticEnergies(OpenMM::ContextImpl& context, double kick, double constraintTolerance, double& translational,
-                                      double& rotational);
+    void computeKickedKineticEnergies(OpenMM::ContextImpl& context, double kick, double constraintTolerance, int forces,
+                                      double& translational, double& rotational);
     double computeKineticEnergy(OpenMM::ContextImpl& context);
     bool getBodyStates(OpenMM::ContextImpl& context, std::vector<double>& states);
     bool setBodyStates(OpenMM::ContextImpl& context, const std::vector<double>& states);
     void finishStep(OpenMM::ContextImpl& context, double dt);
 private:
+    /** The Context's forces (-1) or those saveForces() kept in a slot. */
+    const std::vector<OpenMM::Vec3>& forceSet(OpenMM::ContextImpl& context, int forces) const;
     std::unique_ptr<HostThreads> threads;
     std::unique_ptr<HostConstraints> constraints;
     std::unique_ptr<RigidBodyDynamics> dynamics;
@@ -50,6 +53,8 @@ private:
     std::vector<OpenMM::Vec3> writtenPositions;
     /** The velocities a step starts from (for abandonStep()). */
     std::vector<OpenMM::Vec3> startVelocities;
+    /** The force sets of saveForces(), by slot. */
+    std::vector<std::vector<OpenMM::Vec3> > savedForces;
     /** The kinetic energies before and after the last rescaleMomenta(), and the work K' - K summed since the last takeThermostatWork(). */
     double rescalingKinetic = 0.0, rescalingNewKinetic = 0.0, thermostatWork = 0.0;
 };

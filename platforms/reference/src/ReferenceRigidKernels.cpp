@@ -1,5 +1,6 @@
 #include "ReferenceRigidKernels.h"
 #include "openmm/Context.h"
+#include "openmm/OpenMMException.h"
 #include "openmm/internal/ThreadPool.h"
 #include "openmm/reference/ReferenceConstraints.h"
 #include "openmm/reference/ReferencePlatform.h"
@@ -109,14 +110,29 @@ bool ReferenceIntegrateRigidBodyStepKernel::positionsAreCurrent(ContextImpl& con
     return dynamics->particleArraysEqual(extractPositions(context), writtenPositions);
 }
 
-void ReferenceIntegrateRigidBodyStepKernel::kickAndDrift(ContextImpl& context, double kick, double drift,
-                                                         RigidBodyOptions::RotationMethod method, double constraintTolerance) {
-    dynamics->kickAndDrift(extractPositions(context), extractVelocities(context), extractForces(context), kick, drift, method,
-                           constraintTolerance);
+const vector<Vec3>& ReferenceIntegrateRigidBodyStepKernel::forceSet(ContextImpl& context, int forces) const {
+    if (forces < 0)
+        return extractForces(context);
+    if (forces >= (int) savedForces.size())
+        throw OpenMMException("internal error: no forces were saved in slot " + to_string(forces));
+    return savedForces[forces];
 }
 
-void ReferenceIntegrateRigidBodyStepKernel::closingKick(ContextImpl& context, double kick, double constraintTolerance) {
-    dynamics->closingKick(extractPositions(context), extractVelocities(context), extractForces(context), kick, constraintTolerance);
+void ReferenceIntegrateRigidBodyStepKernel::saveForces(ContextImpl& context, int slot) {
+    if (slot >= (int) savedForces.size())
+        savedForces.resize(slot + 1);
+    savedForces[slot] = extractForces(context);
+}
+
+void ReferenceIntegrateRigidBodyStepKernel::kickAndDrift(ContextImpl& context, double kick, double drift,
+                                                         RigidBodyOptions::RotationMethod method, double constraintTolerance,
+                                                         int forces, BodySet set) {
+    dynamics->kickAndDrift(extractPositions(context), extractVelocities(context), forceSet(context, forces), kick, drift, method,
+                           constraintTolerance, set);
+}
+
+void ReferenceIntegrateRigidBodyStepKernel::closingKick(ContextImpl& context, double kick, double constraintTolerance, int forces) {
+    dynamics->closingKick(extractPositions(context), extractVelocities(context), forceSet(context, forces), kick, constraintTolerance);
 }
 
 void ReferenceIntegrateRigidBodyStepKernel::thermalize(ContextImpl& context, double c, double kT, uint64_t seed, uint64_t counter,
@@ -150,8 +166,8 @@ void ReferenceIntegrateRigidBodyStepKernel::computeKineticEnergies(ContextImpl& 
 }
 
 void ReferenceIntegrateRigidBodyStepKernel::computeKickedKineticEnergies(ContextImpl& context, double kick, double constraintTolerance,
-                                                                         double& translational, double& rotational) {
-    dynamics->computeKickedKineticEnergies(extractPositions(context), extractVelocities(context), extractForces(context), kick,
+                                                                         int forces, double& translational, double& rotational) {
+    dynamics->computeKickedKineticEnergies(extractPositions(context), extractVelocities(context), forceSet(context, forces), kick,
                                            constraintTolerance, translational, rotational);
 }
 

@@ -252,10 +252,11 @@ KERNEL void rigidRecordVelocities(int numBodyParticles, GLOBAL const int* RESTRI
 }
 
 /*
- * RigidBodyDynamics::kickAndDrift for the bodies: the momenta rebuilt from the particles if their
- * velocities are not those last written (a CMMotionRemover changed them), a kick of V += F kick / M,
- * L += tau kick (none if kick is 0), the drift R += V drift with the free rotation of the attitude
- * (exact, or NO_SQUISH except for a linear body), and the particles placed at R + A^T b_i.
+ * RigidBodyDynamics::kickAndDrift for the bodies bodyList[0 .. numBodies - 1]: the momenta rebuilt
+ * from the particles if their velocities are not those last written (a CMMotionRemover changed them),
+ * a kick of V += F kick / M, L += tau kick (none if kick is 0), the drift R += V drift with the free
+ * rotation of the attitude (exact, or NO_SQUISH except for a linear body), and the particles placed
+ * at R + A^T b_i (none of the three if drift is 0).
  */
 KERNEL void rigidKickDrift(int numBodies, GLOBAL const int* RESTRICT bodyStart, GLOBAL const int* RESTRICT bodyParticles,
         GLOBAL const double* RESTRICT bodyCoordinates, GLOBAL const double* RESTRICT bodyParticleMass,
@@ -263,8 +264,9 @@ KERNEL void rigidKickDrift(int numBodies, GLOBAL const int* RESTRICT bodyStart, 
         GLOBAL double* RESTRICT states, GLOBAL double* RESTRICT writtenVelocities, GLOBAL real4* posq, GLOBAL real4* posqCorrection,
         GLOBAL const mixed4* RESTRICT velm, GLOBAL const mm_long* RESTRICT force, int paddedNumAtoms, double kick, double drift,
         int noSquish, double displacementLimit, GLOBAL int* errorCode, GLOBAL double* errorData,
-        GLOBAL const double* RESTRICT inertiaScale) {
-    for (int b = GLOBAL_ID; b < numBodies; b += GLOBAL_SIZE) {
+        GLOBAL const double* RESTRICT inertiaScale, GLOBAL const int* RESTRICT bodyList) {
+    for (int j = GLOBAL_ID; j < numBodies; j += GLOBAL_SIZE) {
+        const int b = bodyList[j];
         RigidBodyState s;
         RigidShape shape = shapes[b];
         double v[3];
@@ -305,26 +307,28 @@ KERNEL void rigidKickDrift(int numBodies, GLOBAL const int* RESTRICT bodyStart, 
                 s.l[k] = nl[k];
             }
         }
-        const double distance = sqrt(s.v[0]*s.v[0] + s.v[1]*s.v[1] + s.v[2]*s.v[2])*fabs(drift);
-        if (!rigidDisplacementOk(distance, displacementLimit)) {
-            rigidReportError(errorCode, errorData, RIGID_ERROR_BODY_MOVES, b, distance, drift);
-            continue;
-        }
-        /* RigidBodyDynamics::driftBody and rotate */
-        for (k = 0; k < 3; k++)
-            s.r[k] += drift*s.v[k];
-        if (shape.kind != RigidKindPoint) {
-            double bodyL[3], omega[3];
-            rigidMultiplyVector(s.a, s.l, bodyL);
-            if (noSquish && shape.kind != RigidKindLinear)
-                rigidNoSquishRotate(shape.moments, drift, s.a, bodyL);
-            else {
-                rigidAngularVelocity(shape.moments, bodyL, omega);
-                rigidRotorAdvance(&shape, omega, s.a, drift);
+        if (drift != 0.0) {
+            const double distance = sqrt(s.v[0]*s.v[0] + s.v[1]*s.v[1] + s.v[2]*s.v[2])*fabs(drift);
+            if (!rigidDisplacementOk(distance, displacementLimit)) {
+                rigidReportError(errorCode, errorData, RIGID_ERROR_BODY_MOVES, b, distance, drift);
+                continue;
             }
-            rigidReorthonormalize(s.a);
+            /* RigidBodyDynamics::driftBody and rotate */
+            for (k = 0; k < 3; k++)
+                s.r[k] += drift*s.v[k];
+            if (shape.kind != RigidKindPoint) {
+                double bodyL[3], omega[3];
+                rigidMultiplyVector(s.a, s.l, bodyL);
+                if (noSquish && shape.kind != RigidKindLinear)
+                    rigidNoSquishRotate(shape.moments, drift, s.a, bodyL);
+                else {
+                    rigidAngularVelocity(shape.moments, bodyL, omega);
+                    rigidRotorAdvance(&shape, omega, s.a, drift);
+                }
+                rigidReorthonormalize(s.a);
+            }
+            rigidPlaceParticles(&s, bodyCoordinates, bodyParticles, currentIndex, start, end, posq, posqCorrection);
         }
-        rigidPlaceParticles(&s, bodyCoordinates, bodyParticles, currentIndex, start, end, posq, posqCorrection);
         rigidStoreState(states, b, &s);
     }
 }

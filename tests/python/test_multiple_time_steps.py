@@ -1,0 +1,229 @@
+"""Multiple time steps by force group (RigidBodyIntegratorBase.setForceGroupSubsteps):
+- one level (every group with one substep) is today's step, bit for bit (Reference), in both integrators;
+- a stiff fast force (the peptide's bonds, angles and torsions) conserves the energy better with
+  substeps, by about the square of their number, as RESPA's inner Verlet does;
+- a body no fast force reaches drifts once per drift of the step: its trajectory is the one it has
+  when its drift is cut into the substeps (a zero fast force on it makes it take part), to 1e-12 nm;
+- the energy balance dE = W + Q holds over the nest (Langevin with its O stage at the midpoint, and
+  Omelyan2 with the Bussi thermostat), on Reference and CPU;
+- CPU and the GPU platforms follow Reference; a checkpoint continues the run bit for bit on Reference;
+  copies keep the substeps; bad lists, changes once bound and conflicting integration force groups
+  are refused with the class named.
+"""
+
+import numpy as np
+import openmm
+import openmm.app as app
+import openmm.unit as unit
+import pytest
+
+import openmmrigid
+import systems
+from openmmrigid import RigidBodyIntegrator, RigidBodyLangevinIntegrator
+from systems import COPY_METHODS, copy_integrator, positions_of, velocities_of
+
+KJ = unit.kilojoule_per_mole
+BONDED = (openmm.HarmonicBondForce, openmm.HarmonicAngleForce, openmm.PeriodicTorsionForce, openmm.CMAPTorsionForce)
+FAST_GROUP = 1
+
+
+def split_groups(system):
+    """A copy of the System with the bonded forces in FAST_GROUP and everything else in group 0."""
+    split = openmm.XmlSerializer.deserialize(openmm.XmlSerializer.serialize(system))
+    for force in split.getForces():
+        force.setForceGroup(FAST_GROUP if isinstance(force, BONDED) else 0)
+    return split
+
+
+@pytest.fixture(scope="module")
+def mixed():
+    """systems.mixed_system() with its bonded forces in group 1: the peptide, benzene and CO2 are
+    reached by them (fast), the waters and Na+ are not (slow)."""
+    mixed = systems.mixed_system()
+    mixed.split = split_groups(mixed.system)
+    mixed.bodies = mixed.waters + [mixed.benzene, mixed.co2, mixed.sodium]
+    return mixed
+
+
+def start(system, integrator, platformName, positions, velocities):
+    context = systems.make_context(system, integrator, platformName)
+    context.setPositions(positions)
+    context.setVelocities(velocities)
+    return context
+
+
+def make(kind, dt, bodies, substeps=None):
+    if kind == "langevin":
+        integrator = RigidBodyLangevinIntegrator(300, 2, dt, bodies)
+        integrator.setRandomNumberSeed(17)
+    else:
+        integrator = RigidBodyIntegrator(dt, bodies)
+    if substeps is not None:
+        integrator.setForceGroupSubsteps(substeps)
+    return integrator
+
+
+@pytest.mark.parametrize("kind", ["verlet", "langevin"])
+def test_one_level_is_todays_step_bit_for_bit(mixed, kind):
+    runs = []
+    for substeps in (None, [(0, 1), (FAST_GROUP, 1)]):
+        integrator = make(kind, 0.002, mixed.bodies, substeps)
+        context = start(mixed.split, integrator, "Reference", mixed.positions, mixed.velocities)
+        integrator.step(15)
+        runs.append((positions_of(context), velocities_of(context)))
+    assert np.array_equal(runs[0][0], runs[1][0]) and np.array_equal(runs[0][1], runs[1][1])
+
+
+def peptide_in_vacuum():
+    """Alanine dipeptide without cutoff, HBonds constraints, its bonded forces in FAST_GROUP."""
+    pdb = openmmrigid.testing.alanineDipeptide()
+    forcefield = app.ForceField("amber14-all.xml")
+    system = split_groups(forcefield.createSystem(pdb.topology, nonbondedMethod=app.NoCutoff, constraints=app.HBonds))
+    integrator = openmm.VerletIntegrator(0.001)
+    integrator.setConstraintTolerance(1e-10)
+    context = openmm.Context(system, integrator, openmm.Platform.getPlatformByName("Reference"))
+    context.setPositions(pdb.positions)
+    openmm.LocalEnergyMinimizer.minimize(context, 1.0, 200)
+    context.setVelocitiesToTemperature(300 * unit.kelvin, 3)
+    integrator.step(200)
+    state = context.getState(getPositions=True, getVelocities=True)
+    return system, state.getPositions(asNumpy=True), state.getVelocities(asNumpy=True)
+
+
+def test_substeps_conserve_the_energy_of_stiff_fast_forces():
+    """The peptide's heavy-atom bonds (periods near 20 fs) under Verlet at 3 fs: the energy error is
+    mostly theirs, and falls as (1/r)^2 with r substeps; at least 4 times less with 4 substeps."""
+    system, positions, velocities = peptide_in_vacuum()
+    fluctuations = {}
+    for inner in (1, 4):
+        integrator = RigidBodyIntegrator(0.003, [])
+        integrator.setConstraintTolerance(1e-10)
+        integrator.setForceGroupSubsteps([(0, 1), (FAST_GROUP, inner)])
+        context = start(system, integrator, "Reference", positions, velocities)
+        times, energies = systems.run_energies(context, integrator, 400, 2)
+        fluctuations[inner] = np.std(energies)
+    print("rms energy fluctuation, 1 and 4 substeps:", fluctuations)
+    assert fluctuations[4] < fluctuations[1] / 4, fluctuations
+
+
+@pytest.mark.parametrize("kind", ["verlet", "langevin"])
+def test_a_body_no_fast_force_reaches_drifts_whole_as_in_pieces(mixed, kind):
+    """The waters drift once per step; with a fast force of zero on them they take part in the three
+    substeps instead. Free drifts compose, so both runs are the same to rounding, everywhere."""
+    reached = openmm.XmlSerializer.deserialize(openmm.XmlSerializer.serialize(mixed.split))
+    zero = openmm.CustomExternalForce("0*x")
+    for water in mixed.waters:
+        for particle in water:
+            zero.addParticle(particle, [])
+    zero.setForceGroup(FAST_GROUP)
+    reached.addForce(zero)
+    runs = []
+    for system in (mixed.split, reached):
+        integrator = make(kind, 0.003, mixed.bodies, [(0, 1), (FAST_GROUP, 3)])
+        context = start(system, integrator, "Reference", mixed.positions, mixed.velocities)
+        integrator.step(10)
+        runs.append(positions_of(context))
+    difference = np.abs(runs[0] - runs[1]).max()
+    print(kind, "largest difference", difference)
+    assert difference < 1e-12, difference
+
+
+def total_energy(context, integrator):
+    state = context.getState(getEnergy=True, groups=integrator.getIntegrationForceGroups())
+    return (state.getKineticEnergy() + state.getPotentialEnergy()).value_in_unit(KJ)
+
+
+@pytest.mark.parametrize("platformName", ["Reference", "CPU"])
+@pytest.mark.parametrize("kind", ["langevin", "bussi-omelyan2"])
+def test_shadow_work_and_heat_make_up_the_energy_change(mixed, platformName, kind):
+    if kind == "langevin":
+        integrator = make("langevin", 0.004, mixed.bodies, [(0, 1), (FAST_GROUP, 4)])
+    else:
+        integrator = make("verlet", 0.004, mixed.bodies, [(0, 1), (FAST_GROUP, 2)])
+        integrator.setSplitting(RigidBodyIntegrator.Omelyan2)
+        integrator.setThermostat(300, 0.05)
+    integrator.setMeasureShadowWork(True)
+    integrator.setMeasureHeat(True)
+    context = start(mixed.split, integrator, platformName, mixed.positions, mixed.velocities)
+    integrator.step(1)
+    integrator.resetShadowWork()
+    integrator.resetHeat()
+    before = total_energy(context, integrator)
+    integrator.step(20)
+    change = total_energy(context, integrator) - before
+    work, heat = integrator.getShadowWork().value_in_unit(KJ), integrator.getHeat().value_in_unit(KJ)
+    assert work != 0 and heat != 0
+    assert abs(work + heat - change) < 1e-9 * abs(before), (work, heat, change)
+
+
+@pytest.mark.parametrize("platformName", ["CPU"] + systems.GPU_PLATFORMS)
+@pytest.mark.parametrize("kind", ["verlet", "langevin"])
+def test_platforms_follow_reference(mixed, platformName, kind):
+    runs = {}
+    for name in ("Reference", platformName):
+        integrator = make(kind, 0.003, mixed.bodies, [(0, 1), (FAST_GROUP, 3)])
+        integrator.setConstraintTolerance(1e-7)
+        if name in systems.GPU_PLATFORMS:
+            platform, properties = systems.platform_and_properties(name)
+            properties = dict(properties, Precision="double")
+            context = openmm.Context(mixed.split, integrator, platform, properties)
+            context.setPositions(mixed.positions)
+            context.setVelocities(mixed.velocities)
+        else:
+            context = start(mixed.split, integrator, name, mixed.positions, mixed.velocities)
+        integrator.step(10)
+        runs[name] = positions_of(context)
+    difference = np.abs(runs[platformName] - runs["Reference"]).max()
+    print(platformName, kind, difference)
+    assert difference < 1e-6, difference
+
+
+@pytest.mark.parametrize("kind", ["verlet", "langevin"])
+def test_checkpoint_continues_bit_for_bit(mixed, kind):
+    integrator = make(kind, 0.003, mixed.bodies, [(0, 1), (FAST_GROUP, 3)])
+    context = start(mixed.split, integrator, "Reference", mixed.positions, mixed.velocities)
+    integrator.step(5)
+    checkpoint = context.createCheckpoint()
+    integrator.step(8)
+    straight = positions_of(context), velocities_of(context)
+    context.loadCheckpoint(checkpoint)
+    integrator.step(8)
+    assert np.array_equal(straight[0], positions_of(context)) and np.array_equal(straight[1], velocities_of(context))
+
+
+@pytest.mark.parametrize("method", COPY_METHODS)
+def test_copies_keep_the_substeps(method):
+    integrator = RigidBodyLangevinIntegrator(300, 1, 0.004)
+    integrator.setForceGroupSubsteps([(3, 4), (0, 1), (2, 2), (5, 4)])
+    copy = copy_integrator(integrator, method)
+    assert copy.getForceGroupSubsteps() == [(3, 4), (0, 1), (2, 2), (5, 4)]
+    assert copy.getIntegrationForceGroups() == {0, 2, 3, 5}
+
+
+@pytest.mark.parametrize("substeps,message", [
+    ([(0, 2), (1, 4)], "slowest force groups have 2 substeps"),
+    ([(0, 1), (1, 2), (2, 3)], "3 substeps is not a multiple of 2"),
+    ([(0, 1), (0, 2)], "force group 0 is listed twice"),
+    ([(32, 1)], "force group 32 is not a force group"),
+    ([(0, 1), (1, 0)], "force group 1 has 0 substeps"),
+    ([(0, 1, 2)], "give a list of (force group, substeps) pairs"),
+    ("0,1", "give a list of (force group, substeps) pairs"),
+])
+def test_bad_substeps_are_refused(substeps, message):
+    integrator = RigidBodyIntegrator(0.002)
+    with pytest.raises(openmm.OpenMMException, match=r"RigidBodyIntegrator|setForceGroupSubsteps") as error:
+        integrator.setForceGroupSubsteps(substeps)
+    assert message in str(error.value)
+    assert integrator.getForceGroupSubsteps() == []
+
+
+def test_changes_once_bound_and_other_integration_groups_are_refused(mixed):
+    integrator = make("langevin", 0.002, mixed.bodies, [(0, 1), (FAST_GROUP, 2)])
+    with pytest.raises(openmm.OpenMMException, match="RigidBodyLangevinIntegrator: the integration force groups are those"):
+        integrator.setIntegrationForceGroups({0})
+    integrator.setIntegrationForceGroups({0, FAST_GROUP})  # the same groups: accepted
+    start(mixed.split, integrator, "Reference", mixed.positions, mixed.velocities)
+    with pytest.raises(openmm.OpenMMException, match="RigidBodyLangevinIntegrator: the force groups' substeps cannot change"):
+        integrator.setForceGroupSubsteps([(0, 1), (FAST_GROUP, 4)])
+    integrator.setForceGroupSubsteps([(0, 1), (FAST_GROUP, 2)])  # unchanged: accepted
+    integrator.step(2)
