@@ -140,15 +140,19 @@ struct CommonIntegrateRigidBodyStepKernel::Impl {
     /** The bodies of each BodySet, by index (RigidBodySystem::getBodySet()), and how many each has. */
     ComputeArray bodySets[3];
     int bodySetSize[3] = {0, 0, 0};
-    /** The force sets of saveForces(), by slot, each a copy of the platform's force buffer. */
-    vector<ComputeArray> savedForces;
+    /**
+     * The force sets of saveForces(), by slot, each a copy of the platform's force buffer. Held by
+     * pointer: a kernel keeps the address of an array argument until it runs, so an array must not
+     * move when another slot is added.
+     */
+    vector<unique_ptr<ComputeArray> > savedForces;
     /** The Context's forces (-1) or those saveForces() kept in a slot. */
     ArrayInterface& forceSet(int forces) {
         if (forces < 0)
             return cc.getLongForceBuffer();
-        if (forces >= (int) savedForces.size() || !savedForces[forces].isInitialized())
+        if (forces >= (int) savedForces.size() || !savedForces[forces])
             throw OpenMMException("internal error: no forces were saved in slot " + to_string(forces));
-        return savedForces[forces];
+        return *savedForces[forces];
     }
     ComputeKernel updateAtomOrder, recordVelocities, kickDrift, kickDriftFree, finishFreeDrift, closingKick, kickFree;
     ComputeKernel thermalizeBodies, thermalizeFree, scaleBodies, scaleFree, kineticEnergies, sumPairs, sumRescale, fitTranslation;
@@ -755,9 +759,11 @@ void CommonIntegrateRigidBodyStepKernel::saveForces(ContextImpl& context, int sl
     if (slot >= (int) d.savedForces.size())
         d.savedForces.resize(slot + 1);
     ArrayInterface& force = cc.getLongForceBuffer();
-    if (!d.savedForces[slot].isInitialized())
-        d.savedForces[slot].initialize(cc, force.getSize(), force.getElementSize(), "rigidSavedForces");
-    force.copyTo(d.savedForces[slot]);
+    if (!d.savedForces[slot]) {
+        d.savedForces[slot].reset(new ComputeArray());
+        d.savedForces[slot]->initialize(cc, force.getSize(), force.getElementSize(), "rigidSavedForces");
+    }
+    force.copyTo(*d.savedForces[slot]);
 }
 
 void CommonIntegrateRigidBodyStepKernel::kickAndDrift(ContextImpl& context, double kick, double drift,
@@ -847,6 +853,7 @@ void CommonIntegrateRigidBodyStepKernel::writeBodyVelocities(ContextImpl& contex
     // rigidClosingKick with no kick: the rigid velocities written (and recorded as written), no
     // velocity constraints, and no status check (that waits for the step's last force evaluation).
     if (d.numBodies > 0) {
+        d.closingKick->setArg(10, cc.getLongForceBuffer());  // not read without a kick
         d.closingKick->setArg(12, 0.0);
         d.closingKick->execute(d.numBodies);
     }
