@@ -266,3 +266,30 @@ def test_changes_once_bound_and_other_integration_groups_are_refused(mixed):
     integrator.setForceGroupSubsteps([(0, 1), (FAST_GROUP, 2)])  # unchanged: accepted
     integrator.step(2)
     assert np.all(np.isfinite(positions_of(context)))
+
+
+def test_compound_integrator_steps_as_the_integrator_alone(mixed):
+    """Inside a CompoundIntegrator (with a stock VerletIntegrator beside it, never stepped here) the
+    nest is the same, bit for bit on Reference; after the other integrator moved the particles, the
+    levels' forces are evaluated again, and the run goes on from the new positions."""
+    runs = []
+    for compound in (False, True):
+        integrator = make("langevin", 0.003, mixed.bodies, [(0, 1), (FAST_GROUP, 3)])
+        if compound:
+            holder = openmm.CompoundIntegrator()
+            holder.addIntegrator(integrator)
+            holder.addIntegrator(openmm.VerletIntegrator(0.0005))
+            holder.setCurrentIntegrator(0)
+            context = start(mixed.split, holder, "Reference", mixed.positions, mixed.velocities)
+        else:
+            context = start(mixed.split, integrator, "Reference", mixed.positions, mixed.velocities)
+        integrator.step(6)
+        runs.append(positions_of(context))
+        if compound:
+            holder.setCurrentIntegrator(1)
+            holder.step(2)
+            holder.setCurrentIntegrator(0)
+            holder.step(4)
+            assert np.all(np.isfinite(positions_of(context)))
+            assert np.abs(positions_of(context) - runs[-1]).max() > 0
+    assert np.array_equal(runs[0], runs[1])
