@@ -201,7 +201,7 @@ def main():
             bBias, bBiasError = b - reference[1][0], float(np.hypot(bError, reference[1][1]))
             row.update(U=u, U_bias=uBias, U_error=uBiasError, bonded_bias=bBias, bonded_error=bBiasError, T=t)
             rows.append(row)
-            table.append([config.label, f"{stepFs:g}", f"{uBias:+.0f} +- {uBiasError:.0f}", f"{bBias:+.1f} +- {bError:.1f}",
+            table.append([config.label, f"{stepFs:g}", f"{uBias:+.0f} +- {uBiasError:.0f}", f"{bBias:+.1f} +- {bBiasError:.1f}",
                           f"{t:.1f}", ""])
             say(" | ".join(table[-1]))
             timed[f"{config.label}, {stepFs:g} fs"] = (stepFs, context, integrator, not config.stock)
