@@ -20,6 +20,9 @@ RigidStateDataReporter
     columns for the translational and rotational kinetic energies and temperatures.
 rigidBodiesFromTopology
     The bodies (lists of particle indices) of the selected residues of an ``openmm.app.Topology``.
+rigidHydrogenGroups
+    The bodies of a System's constraint clusters (X-H groups, waters) and, optionally, its planar groups
+    (aromatic rings, amides, peptide groups): a model with rigid X-H groups.
 removeIntraBodyInteractions
     A copy of a System without the bonded terms, nonbonded pairs and constraints inside each body.
 getSupportedPlatforms
@@ -47,7 +50,7 @@ from .integrator import (AccuracyWarning, NoThermostatError, RigidBodyIntegrator
                          deserializeIntegrator, getSupportedPlatforms, pluginLoadFailures)
 from .intrabody import removeIntraBodyInteractions
 from .reporters import RigidStateDataReporter
-from .topology import rigidBodiesFromTopology
+from .topology import rigidBodiesFromTopology, rigidHydrogenGroups
 
 try:
     __version__ = _distributionVersion("openmm-rigid")
@@ -55,4 +58,4 @@ except PackageNotFoundError:  # imported from a source tree that was never insta
     __version__ = "unknown"
 
 __all__ = ["getSupportedPlatforms", "pluginLoadFailures", "NoThermostatError", "AccuracyWarning", "RigidBodyIntegrator", "RigidBodyLangevinIntegrator", "RigidBodyIntegratorBase", "RigidStateDataReporter", "deserializeIntegrator", "FreeRotor", "special", "testing",
-           "rigidBodiesFromTopology", "removeIntraBodyInteractions", "__version__"]
+           "rigidBodiesFromTopology", "rigidHydrogenGroups", "removeIntraBodyInteractions", "__version__"]
