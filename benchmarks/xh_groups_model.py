@@ -372,9 +372,11 @@ def report(results, measure, args, document):
             worst = np.argsort(change)[::-1][:2]
             lines.append(f"- {run}, {angle}: median over residues {np.median(change):.1f} deg; largest "
                          + ", ".join(f"{labels[i]} {change[i]:.0f} deg" for i in worst))
-    document.text("The rms change of phi and psi from the minimized structure, per residue (each residue's "
-                  "over the run):\n\n" + "\n".join(lines))
+    document.section("Backbone dihedrals per residue",
+                     "The rms change of phi and psi from the minimized structure, per residue (each residue's "
+                     "over the run), its median over residues and the two largest:\n\n" + "\n".join(lines))
     say("\n".join(lines))
+    document.section("Runs")
     runRows = [[run, results[run]["bodies"] or "-", results[run]["dof"], f"{results[run]['steps_per_second']:.1f}",
                 results[run]["warnings"] or "none"] for run in RUNS if run in results]
     document.table(["run", "bodies", "solute dof", "steps/s (with the per-frame analysis)", "warnings"], runRows)
@@ -514,6 +516,7 @@ def main():
         for key, value in (data["settings"].item() if "settings" in data else {}).items():
             setattr(args, key, value)
 
+    provenance = benchmarking.header(args.platform, args.threads)  # as the run starts
     stamp("building villin HP35 in TIP3P")
     topology, positions, system = buildSystem(args.padding)
     solute = np.array([atom.index for atom in topology.atoms() if atom.residue.name not in ("HOH", "NA", "CL")])
@@ -541,7 +544,7 @@ def main():
             results[run] = runOne(run, topology, start, minimum, system, analysis, measure, args, platform, properties)
             results[run]["frame_ps"] = args.save_every/1000
         np.savez(saved, results=np.array(results, dtype=object), minimum=minimum,
-                 provenance=np.array(benchmarking.header(args.platform, args.threads)),
+                 provenance=np.array(provenance),
                  settings=np.array({key: getattr(args, key) for key in SETTINGS}, dtype=object))
         say(f"wrote {saved.relative_to(benchmarking.ROOT)}")
     measure["minimum"] = minimum
