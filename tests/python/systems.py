@@ -86,6 +86,14 @@ def make_context(system, integrator, platform_name):
     return openmm.Context(system, integrator, platform, properties)
 
 
+def start_context(system, integrator, platform_name, positions, velocities):
+    """make_context() with the positions and velocities set."""
+    context = make_context(system, integrator, platform_name)
+    context.setPositions(positions)
+    context.setVelocities(velocities)
+    return context
+
+
 # ------------------------------------------------------------------------------------------------
 # Small rigid molecules, each: (name, masses, body-frame coordinates in nm, charges, sigma, epsilon)
 # ------------------------------------------------------------------------------------------------

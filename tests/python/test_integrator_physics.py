@@ -46,11 +46,7 @@ def rigid_integrator(dt, bodies=None, method="Exact"):
     return integrator
 
 
-def start(system, integrator, platform, positions, velocities):
-    context = systems.make_context(system, integrator, platform)
-    context.setPositions(positions)
-    context.setVelocities(velocities)
-    return context
+start = systems.start_context
 
 
 def run_cluster(cluster, platform, dt, steps, method="Exact"):

@@ -72,11 +72,7 @@ def mixed():
     return mixed
 
 
-def start(system, integrator, platformName, positions, velocities):
-    context = systems.make_context(system, integrator, platformName)
-    context.setPositions(positions)
-    context.setVelocities(velocities)
-    return context
+start = systems.start_context
 
 
 def make(kind, dt, bodies, substeps=None):

@@ -18,6 +18,7 @@ import pytest
 from openmm import app, unit
 
 import openmmrigid
+from test_topology_bodies import solvatedDipeptide
 
 FORCE_FIELD = ("amber14-all.xml", "amber14/tip3p.xml")
 
@@ -29,19 +30,6 @@ def villinInVacuum(constraints=app.HBonds):
     modeller.delete([residue for residue in modeller.topology.residues() if residue.name in ("HOH", "Cl")])
     system = app.ForceField(*FORCE_FIELD).createSystem(modeller.topology, nonbondedMethod=app.NoCutoff,
                                                        constraints=constraints)
-    return modeller.topology, np.array(modeller.positions.value_in_unit(unit.nanometer)), system
-
-
-def solvatedDipeptide(model="tip3p", size=1.8):
-    """Alanine dipeptide in a small periodic water box (amber14, PME, HBonds, rigid water)."""
-    forceField = app.ForceField("amber14-all.xml", f"amber14/{model}.xml")
-    pdb = openmmrigid.testing.alanineDipeptide()
-    modeller = app.Modeller(pdb.topology, pdb.positions)
-    positions = np.array(modeller.positions.value_in_unit(unit.nanometer))
-    modeller.positions = (positions - positions.mean(axis=0) + 0.5*size)*unit.nanometer
-    modeller.addSolvent(forceField, model=model, boxSize=openmm.Vec3(size, size, size)*unit.nanometer)
-    system = forceField.createSystem(modeller.topology, nonbondedMethod=app.PME, nonbondedCutoff=0.7*unit.nanometer,
-                                     constraints=app.HBonds, rigidWater=True)
     return modeller.topology, np.array(modeller.positions.value_in_unit(unit.nanometer)), system
 
 
