@@ -18,6 +18,19 @@ without a thermostat. A suffix m<k> raises every moment of inertia to at least k
     python benchmarks/accuracy_check.py                   # every run, 216 waters, 40 ps: docs/results/accuracy_check.md
     python benchmarks/accuracy_check.py --molecules 500 --runs L10f1 BV6 L8f1 BO6 --time 30
     python benchmarks/accuracy_check.py --molecules 500 --runs L12f1m4 L14f1m4 L16f1m4 --time 30
+
+--cost measures what the check's episodes cost instead (docs/results/accuracy_check_cost.md): 2000
+TIP4P-Ew waters (PME 0.9 nm, Ewald tolerance 5e-4), minimized and equilibrated 1 ps with
+LangevinMiddleIntegrator; RigidBodyLangevinIntegrator (300 K, 1/ps) and RigidBodyIntegrator with the
+Bussi thermostat (Verlet, tau 1 ps), both at 2 fs, each as three Contexts from that state: the check off,
+the check on (the default; every timed step lies in the first episode, the first 4 ps of a Context),
+and the check off with setMeasureShadowWork(True), which evaluates the energy at every step as the
+episodes did before they read samples. Stock LangevinMiddleIntegrator for scale. Blocks of --block
+steps, one block of each in turn (benchmarking.timeInterleaved), --repetitions blocks each; reported:
+median ms/step, and the ratio to the check off, the median of the blocks' ratios (block r of one
+against block r of the other, timed side by side) with their range.
+
+    python benchmarks/accuracy_check.py --cost --threads 2      # about 4 minutes on 2 cores
 """
 
 import argparse
@@ -97,6 +110,62 @@ def run(name, system, state, platform, properties, picoseconds, every=0.05):
                 kind="heating" if friction > 0 else "fluctuation", message=integrator.getAccuracyWarning())
 
 
+def measureCost(args):
+    """--cost: the episodes' cost against the check off, side by side (the module's docstring)."""
+    platform = openmm.Platform.getPlatformByName("CPU")
+    properties = {"Threads": str(args.threads)}
+    _, positions, system = waterBox("tip4pew", molecules=2000, nonbondedCutoff=0.9*unit.nanometer, ewaldErrorTolerance=5e-4)
+    equilibration = openmm.LangevinMiddleIntegrator(300, 1, 0.002)
+    context = openmm.Context(system, equilibration, platform, properties)
+    context.setPositions(positions)
+    openmm.LocalEnergyMinimizer.minimize(context, 10, 200)
+    context.setVelocitiesToTemperature(300, 1)
+    equilibration.step(500)
+    state = context.getState(getPositions=True, getVelocities=True, enforcePeriodicBox=True)
+    del context
+    # Every timed step of a "check on" Context within its first episode (the first 4 ps).
+    if (args.repetitions + 1)*args.block*0.002 >= 2*benchmarking.CHECK_WINDOW_PS:
+        raise SystemExit("--repetitions x --block would leave the first episode")
+
+    def make(kind, mode):
+        if kind == "stock":
+            return openmm.LangevinMiddleIntegrator(300, 1, 0.002)
+        if kind == "Langevin":
+            integrator = openmmrigid.RigidBodyLangevinIntegrator(300, 1, 0.002)
+        else:
+            integrator = openmmrigid.RigidBodyIntegrator(0.002)
+            integrator.setThermostat(300, 1.0)
+        integrator.setAccuracyCheck(mode == "check on")
+        integrator.setMeasureShadowWork(mode == "energy every step")
+        return integrator
+
+    modes = ["check off", "check on", "energy every step"]
+    integrators = {"stock LangevinMiddle": make("stock", None)}
+    for kind in ("Langevin", "Bussi"):
+        for mode in modes:
+            integrators[f"{kind}, {mode}"] = make(kind, mode)
+    contexts = []
+    for integrator in integrators.values():
+        contexts.append(openmm.Context(system, integrator, platform, properties))
+        contexts[-1].setState(state)
+    wall, _ = benchmarking.timeInterleaved(integrators, args.block, args.repetitions)
+    document = benchmarking.ResultsDocument("accuracy_check_cost", "What the accuracy check's episodes cost",
+                                            platform="CPU", threads=args.threads,
+                                            about="Method: the docstring of `benchmarks/accuracy_check.py` (--cost).")
+    rows = []
+    for label, samples in wall.items():
+        kind = label.split(",")[0]
+        off = wall.get(f"{kind}, check off")
+        ratios = [a/b for a, b in zip(samples, off)] if off else []
+        rows.append([label, f"{1e3*np.median(samples):.3f}",
+                     f"{np.median(ratios):.4f} ({min(ratios):.4f} to {max(ratios):.4f})" if ratios else ""])
+        say(f"{label:<36} {1e3*np.median(samples):8.3f} ms/step  " + (f"x{np.median(ratios):.4f}" if ratios else ""))
+    document.section("Cost per step", f"2000 TIP4P-Ew waters, PME, 2 fs, CPU platform, {args.threads} thread(s); "
+                     f"{args.repetitions} blocks of {args.block} steps each, interleaved.")
+    document.table(["integrator", "median ms/step", "ratio to the check off (range over blocks)"], rows)
+    document.write()
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--quick", action="store_true")
@@ -105,7 +174,13 @@ def main():
     parser.add_argument("--molecules", type=int, default=216)
     parser.add_argument("--time", type=float, default=None, help="ps per run (default 40; 10 with --quick)")
     parser.add_argument("--threads", type=int, default=1)
+    parser.add_argument("--cost", action="store_true", help="measure the episodes' cost instead (see the docstring)")
+    parser.add_argument("--block", type=int, default=50, help="--cost: steps per timed block")
+    parser.add_argument("--repetitions", type=int, default=15, help="--cost: timed blocks of each integrator")
     args = parser.parse_args()
+    if args.cost:
+        measureCost(args)
+        return
     runs = args.runs or (["L8f1", "L10f1"] if args.quick else RUNS)
     picoseconds = args.time or (10.0 if args.quick else 40.0)
     platform = openmm.Platform.getPlatformByName("CPU")

@@ -349,9 +349,16 @@ public:
      */
     std::string getAccuracyWarning() const;
 #ifndef SWIG
-    /** Whether the step being taken measures the shadow work: for getShadowWork(), or for the accuracy check. */
-    bool measuresShadowWork() const {
-        return measureShadowWork || checkingStep;
+    /**
+     * Whether the step being taken ends with the potential energy evaluated (StepState::potentialEnergy):
+     * to measure the shadow work (getShadowWork()), or for the accuracy check.
+     */
+    bool wantsEnergy() const {
+        return measureShadowWork || energyWanted;
+    }
+    /** Whether the step being taken sums the heat of its stochastic stages: for getHeat(), getShadowWork(), or the accuracy check. */
+    bool wantsHeat() const {
+        return measureHeat || measureShadowWork || checkingStep;
     }
 #endif
     /**
@@ -471,9 +478,11 @@ private:
      * What a step takes from before it, proven current or rebuilt: the bodies fitted again if the
      * positions are not those the kernel last wrote (or a notice came), and whether the forces the
      * Context holds are this integrator's at these positions and this box (returned), box set to the
-     * box now.
+     * box now, and `moved` (if given) to whether the positions or the box changed since the last step.
      */
-    bool makeBodiesCurrent(OpenMM::Vec3* box);
+    bool makeBodiesCurrent(OpenMM::Vec3* box, bool* moved = NULL);
+    /** Whether a barostat of the System may move the particles at this call of updateContextState() (counted by stateUpdates). */
+    bool barostatMayMove(long long call) const;
     /**
      * Evaluate the integration force groups' forces (and, if asked, their energy, kept as the step
      * state's potential energy) at the current positions and box, and record them as current.
@@ -486,12 +495,25 @@ private:
     double minimumMoment;
     std::vector<std::pair<int, int> > groupSubsteps;
     std::vector<TimeStepLevel> levels;
-    bool measureShadowWork, measureHeat, accuracyCheck, checkingStep;
+    bool measureShadowWork, measureHeat, accuracyCheck, checkingStep, energyWanted;
     /** Whether the System has an AndersenThermostat (whose runs the accuracy check leaves alone). */
     bool andersenThermostat;
-    /** The accuracy check of this Context's run, and the shadow work it has read (all steps, not reset). */
+    /**
+     * The accuracy check of this Context's run, and the energy that changed other than by the steps'
+     * deterministic stages and the thermostat: the kernel's tally of the kinetic energy at the start
+     * and end of the steps measured, and the potential energy a barostat's move added (all steps, not
+     * reset; the shadow work at a sample is the potential energy less this and the thermostat's work).
+     */
     AccuracyCheck accuracyMonitor;
-    double checkedWork;
+    double checkedLedger;
+    /**
+     * The System's Monte Carlo barostats: each one's frequency, and the count of updateContextState()
+     * calls (stateUpdates, this integrator's since the Context was made) at which it last moved, or 0.
+     * A barostat tries a move every `frequency` calls; the step before one ends with the energy, so
+     * that the accuracy check can take the move's energy change out.
+     */
+    std::vector<std::pair<int, long long> > barostats;
+    long long stateUpdates;
     bool bound, forcesAreValid, needsProjection;
     /** Whether the bodies' states came from the checkpoint just loaded (the notices that follow the load change nothing). */
     bool restoredCheckpoint;

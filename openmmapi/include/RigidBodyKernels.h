@@ -87,16 +87,13 @@ public:
     /**
      * Stage: the exact Ornstein-Uhlenbeck step of every momentum, with damping factor c, at thermal
      * energy kT, its deviates from the counter-based streams NormalStream(seed, stream, counter)
-     * (see RigidBodyDynamics::thermalize() for which stream is whose).
+     * (see RigidBodyDynamics::thermalize() for which stream is whose). If `heat`, the kinetic energy
+     * it adds (each body's from its momenta, the free particles' after their velocity constraints) is
+     * added to the thermostat's work the kernel accumulates (takeThermostatWork()), where the momenta
+     * are: on a GPU the host reads nothing.
      */
     virtual void thermalize(OpenMM::ContextImpl& context, double c, double kT, uint64_t seed, uint64_t counter,
-                            double constraintTolerance) = 0;
-    /**
-     * Within a step: write the bodies' rigid velocities, from the momenta the stages have made so
-     * far, to their particles, so that computeKineticEnergies() reads the kinetic energy now (the
-     * heat of an Ornstein-Uhlenbeck stage). Changes no momentum and applies no constraint.
-     */
-    virtual void writeBodyVelocities(OpenMM::ContextImpl& context) = 0;
+                            double constraintTolerance, bool heat) = 0;
     /**
      * Stage: one step of the Bussi thermostat (after a closing kick): the kinetic energy K of the
      * Context's velocities (as computeKineticEnergies() sums it), the factor alpha and the new kinetic
@@ -119,11 +116,24 @@ public:
      */
     virtual void getRescalingEnergies(OpenMM::ContextImpl& context, double& kinetic, double& newKinetic) = 0;
     /**
-     * The thermostat's work, sum of K' - K, that rescaleMomenta() has accumulated since the last call,
-     * in kJ/mol; the kernel's sum starts again from 0. On a GPU this waits for the device (unless
-     * nothing was rescaled since the last call): call it only where the host needs the work.
+     * The thermostat's work that rescaleMomenta() (the sum of K' - K) and thermalize() (the heat) have
+     * accumulated since the last call, in kJ/mol; the kernel's sum starts again from 0. On a GPU this
+     * waits for the device (unless nothing was rescaled or thermalized since the last call): call it
+     * only where the host needs the work.
      */
     virtual double takeThermostatWork(OpenMM::ContextImpl& context) = 0;
+    /**
+     * Add sign times the kinetic energy of the context's velocities (as computeKineticEnergies() sums
+     * it) to the kernel's tally, which stays where the momenta are (on a GPU the host reads nothing).
+     * The accuracy check tallies the kinetic energy at the start (+1) and the end (-1) of each step it
+     * measures, so that what changed the velocities between steps (a CMMotionRemover) is accounted for.
+     */
+    virtual void tallyKineticEnergy(OpenMM::ContextImpl& context, double sign) = 0;
+    /**
+     * The tally of tallyKineticEnergy() since the last call, in kJ/mol (the kernel's tally starts again
+     * from 0), and in `kinetic` the kinetic energy its last call summed. On a GPU this waits for the device.
+     */
+    virtual double takeTally(OpenMM::ContextImpl& context, double& kinetic) = 0;
     /**
      * The kinetic energy of the context's velocities, split into translation (centres of mass and
      * free particles) and rotation (about the centres of mass).

@@ -30,12 +30,12 @@ bool AccuracyCheck::notify(const string& text) {
 
 void AccuracyCheck::restart() {
     started = false;
+    stepsToSample = 0;
 }
 
 void AccuracyCheck::stateSet() {
-    started = false;
+    restart();
     windowsAbove = 0;
-    skipNext = true;
 }
 
 bool AccuracyCheck::wantsStep(const Setting& now, double time) {
@@ -48,23 +48,33 @@ bool AccuracyCheck::wantsStep(const Setting& now, double time) {
     return inEpisode;
 }
 
-void AccuracyCheck::record(const Setting& now, double time, double shadowWork, double stepWork, double kinetic) {
-    lastStepWork = stepWork;
+int AccuracyCheck::sampleStride(const Setting& now) {
+    if (!(now.stepSize > 0.0))
+        return 1;
+    const double windowSteps = max((double) MinimumSteps, ceil(WindowTime/now.stepSize*(1.0 - 1e-9)));
+    return max(1, (int) (windowSteps/SamplesPerWindow));
+}
+
+bool AccuracyCheck::wantsSample(const Setting& now) {
+    if (!started || !(now == setting))
+        stepsToSample = 0;  // a new window: its origin is the end of this step
+    const bool sample = (stepsToSample <= 0);
+    stepsToSample = (sample ? sampleStride(now) : stepsToSample) - 1;
+    return sample;
+}
+
+void AccuracyCheck::record(const Setting& now, double time, double shadowWork, double kinetic) {
     if (!message.empty())
         return;  // fired once: enough
-    if (skipNext) {
-        skipNext = false;
-        return;
-    }
     const bool changed = !(now == setting);
     if (changed)
         windowsAbove = 0;  // the windows in a row must be of one setting
     if (!started || changed) {
-        // A new window: its origin is the step before the first one it holds.
+        // A new window, from this sample.
         setting = now;
         started = true;
-        startTime = time - now.stepSize;
-        startWork = shadowWork - lastStepWork;
+        startTime = time;
+        startWork = shadowWork;
         n = st = stt = sw = sww = stw = sk = skk = 0.0;
     }
     const double t = time - startTime, w = shadowWork - startWork;
@@ -77,12 +87,20 @@ void AccuracyCheck::record(const Setting& now, double time, double shadowWork, d
     sk += kinetic;
     skk += kinetic*kinetic;
     lastTime = time;
-    if (t >= WindowTime*(1.0 - 1e-9) && n >= MinimumSteps)
+    if (t >= WindowTime*(1.0 - 1e-9) && t >= MinimumSteps*now.stepSize*(1.0 - 1e-9)) {
         closeWindow();
+        // The next window starts from this sample.
+        started = true;
+        startTime = time;
+        startWork = shadowWork;
+        n = 1;
+        st = stt = sw = sww = stw = 0.0;
+        sk = kinetic;
+        skk = kinetic*kinetic;
+    }
 }
 
 void AccuracyCheck::closeWindow() {
-    started = false;
     const double sxx = stt - st*st/n, sxy = stw - st*sw/n, syy = sww - sw*sw/n;
     const double kineticVariance = skk/n - (sk/n)*(sk/n), meanKinetic = sk/n;
     if (!(sxx > 0.0) || setting.dof <= 0 || !(meanKinetic > 0.0))

@@ -522,18 +522,22 @@ bool RigidBodyDynamics::restoreStates(const vector<double>& flat, const vector<V
     return true;
 }
 
-void RigidBodyDynamics::thermalize(vector<Vec3>& positions, vector<Vec3>& velocities, double c, double kT,
-                                   uint64_t seed, uint64_t step, double constraintTolerance) {
+double RigidBodyDynamics::thermalize(vector<Vec3>& positions, vector<Vec3>& velocities, double c, double kT,
+                                     uint64_t seed, uint64_t step, double constraintTolerance) {
     requireConstraints();
     // The exact Ornstein-Uhlenbeck flow: the mean decays by c, and the variance goes from its
     // starting value s to c^2 s + (1 - c^2) m kT, so the canonical variance m kT stays fixed.
     const double noise = sqrt((1.0 - c*c)*kT);
+    bodyHeat.resize(states.size());
     forEachBody(ThermalizeLoop, [&](int b) {
         BodyState& state = states[b];
         NormalStream normal(seed, b, step);
-        const double velocityNoise = noise/sqrt(system.getBodyMass(b));
+        const double mass = system.getBodyMass(b), velocityNoise = noise/sqrt(mass);
+        // The heat, K' - K of the body's momenta: M (V'^2 - V^2) / 2 plus sum (L'_k^2 - L_k^2) / (2 I_k).
+        double heat = -rigidTranslationalEnergy(mass, state.velocity.data());
         for (int k = 0; k < 3; k++)
             state.velocity[k] = c*state.velocity[k] + velocityNoise*normal.next();
+        heat += rigidTranslationalEnergy(mass, state.velocity.data());
         // In the principal frame the rotational kinetic energy is sum L_k^2 / (2 I_k): each component
         // is an independent Gaussian of variance I_k kT (none along the axis of a linear body, I_0 = 0).
         // The deviates are drawn in the lab frame and turned into the body frame: a rotated isotropic
@@ -548,12 +552,19 @@ void RigidBodyDynamics::thermalize(vector<Vec3>& positions, vector<Vec3>& veloci
         if (system.getKind(b) != RigidKindPoint) {
             const double* moments = system.getMoments(b);
             Vector3 bodyMomentum = multiply(state.attitude, state.angularMomentum), bodyXi = multiply(state.attitude, xi);
+            heat -= rigidRotationalEnergy(moments, bodyMomentum.data());
             for (int k = 0; k < 3; k++)
                 bodyMomentum[k] = c*bodyMomentum[k] + noise*sqrt(moments[k])*bodyXi[k];
+            heat += rigidRotationalEnergy(moments, bodyMomentum.data());
             state.angularMomentum = multiplyTransposed(state.attitude, bodyMomentum);
         }
+        bodyHeat[b] = heat;
     });
     const vector<int>& free = system.getFreeParticles();
+    const vector<double>& masses = system.getMasses();
+    double heat = 0.0;
+    for (int p : free)
+        heat -= 0.5*masses[p]*velocities[p].dot(velocities[p]);
     const uint32_t firstStream = system.getNumBodies();
     for (size_t i = 0; i < free.size(); i++) {
         int p = free[i];
@@ -564,6 +575,12 @@ void RigidBodyDynamics::thermalize(vector<Vec3>& positions, vector<Vec3>& veloci
     }
     if (constraints)
         constraints->applyToVelocities(positions, velocities, inverseMasses, constraintTolerance);
+    for (int p : free)
+        heat += 0.5*masses[p]*velocities[p].dot(velocities[p]);
+    // Summed in body order, whatever the threads.
+    for (double h : bodyHeat)
+        heat += h;
+    return heat;
 }
 
 void RigidBodyDynamics::scaleMomenta(vector<Vec3>& velocities, double alpha) {

@@ -8,6 +8,10 @@
 #include "numerics/SymmetricEigen.h"
 #include "openmm/AndersenThermostat.h"
 #include "openmm/CompoundIntegrator.h"
+#include "openmm/MonteCarloAnisotropicBarostat.h"
+#include "openmm/MonteCarloBarostat.h"
+#include "openmm/MonteCarloFlexibleBarostat.h"
+#include "openmm/MonteCarloMembraneBarostat.h"
 #include "openmm/Context.h"
 #include "openmm/OpenMMException.h"
 #include "openmm/internal/ContextImpl.h"
@@ -34,6 +38,29 @@ bool hasAndersenThermostat(const System& system) {
         if (dynamic_cast<const AndersenThermostat*>(&system.getForce(f)) != NULL)
             return true;
     return false;
+}
+
+/**
+ * The frequencies (in calls of ContextImpl::updateContextState()) of the System's Monte Carlo
+ * barostats, whose moves change the potential energy between steps.
+ */
+vector<int> barostatFrequencies(const System& system) {
+    vector<int> frequencies;
+    for (int f = 0; f < system.getNumForces(); f++) {
+        const Force& force = system.getForce(f);
+        int frequency = 0;
+        if (auto barostat = dynamic_cast<const MonteCarloBarostat*>(&force))
+            frequency = barostat->getFrequency();
+        else if (auto anisotropic = dynamic_cast<const MonteCarloAnisotropicBarostat*>(&force))
+            frequency = anisotropic->getFrequency();
+        else if (auto membrane = dynamic_cast<const MonteCarloMembraneBarostat*>(&force))
+            frequency = membrane->getFrequency();
+        else if (auto flexible = dynamic_cast<const MonteCarloFlexibleBarostat*>(&force))
+            frequency = flexible->getFrequency();
+        if (frequency > 0)
+            frequencies.push_back(frequency);
+    }
+    return frequencies;
 }
 
 /**
@@ -86,13 +113,13 @@ void checkAndersenThermostat(const System& system, const vector<vector<int> >& b
 } // namespace
 
 RigidBodyIntegratorBase::RigidBodyIntegratorBase(const string& className, double stepSize) : className(className),
-        explicitBodies(false), rotationMethod(Exact), minimumMoment(0.0), measureShadowWork(false), measureHeat(false), accuracyCheck(true), checkingStep(false), andersenThermostat(false), checkedWork(0.0), bound(false), forcesAreValid(false), needsProjection(true), restoredCheckpoint(false), loadedVelocityKick(0.0) {
+        explicitBodies(false), rotationMethod(Exact), minimumMoment(0.0), measureShadowWork(false), measureHeat(false), accuracyCheck(true), checkingStep(false), energyWanted(false), andersenThermostat(false), checkedLedger(0.0), stateUpdates(0), bound(false), forcesAreValid(false), needsProjection(true), restoredCheckpoint(false), loadedVelocityKick(0.0) {
     setStepSize(stepSize);
     setConstraintTolerance(1e-5);
 }
 
 RigidBodyIntegratorBase::RigidBodyIntegratorBase(const string& className, double stepSize, const vector<vector<int> >& bodies) :
-        className(className), bodies(bodies), explicitBodies(true), rotationMethod(Exact), minimumMoment(0.0), measureShadowWork(false), measureHeat(false), accuracyCheck(true), checkingStep(false), andersenThermostat(false), checkedWork(0.0), bound(false),
+        className(className), bodies(bodies), explicitBodies(true), rotationMethod(Exact), minimumMoment(0.0), measureShadowWork(false), measureHeat(false), accuracyCheck(true), checkingStep(false), energyWanted(false), andersenThermostat(false), checkedLedger(0.0), stateUpdates(0), bound(false),
         forcesAreValid(false), needsProjection(true), restoredCheckpoint(false), loadedVelocityKick(0.0) {
     setStepSize(stepSize);
     setConstraintTolerance(1e-5);
@@ -415,7 +442,11 @@ void RigidBodyIntegratorBase::initialize(ContextImpl& contextRef) {
     // step's projection then removes energy that is neither its error nor its heat, and the accuracy
     // check would read that as an energy drift. Such a run is not checked.
     andersenThermostat = hasAndersenThermostat(contextRef.getSystem());
-    checkedWork = 0.0;
+    checkedLedger = 0.0;
+    barostats.clear();
+    for (int frequency : barostatFrequencies(contextRef.getSystem()))
+        barostats.push_back({frequency, 0});
+    stateUpdates = 0;
     bound = true;
     forcesAreValid = false;
     needsProjection = true;
@@ -637,9 +668,11 @@ void RigidBodyIntegratorBase::loadCheckpoint(istream& stream) {
     }
 }
 
-bool RigidBodyIntegratorBase::makeBodiesCurrent(Vec3* box) {
+bool RigidBodyIntegratorBase::makeBodiesCurrent(Vec3* box, bool* moved) {
     if (!needsProjection && !getKernel().positionsAreCurrent(*context))
         needsProjection = true;  // moved without a notice: a CompoundIntegrator's other integrator, the minimizer
+    if (moved != NULL)
+        *moved = needsProjection;
     if (needsProjection) {
         projectBodies();
         forcesAreValid = false;
@@ -650,6 +683,8 @@ bool RigidBodyIntegratorBase::makeBodiesCurrent(Vec3* box) {
     // platform is told, since the particles may not have moved (boxChanged()).
     context->getPeriodicBoxVectors(box[0], box[1], box[2]);
     if (box[0] != forcesBox[0] || box[1] != forcesBox[1] || box[2] != forcesBox[2]) {
+        if (moved != NULL)
+            *moved = true;
         forcesAreValid = false;
         getKernel().boxChanged(*context);
     }
@@ -690,13 +725,17 @@ double RigidBodyIntegratorBase::computeKickedKineticEnergy(double kick, const st
 }
 
 void RigidBodyIntegratorBase::takeThermostatWork() const {
-    if (!hasThermostatWork())
+    if (!bound)
         return;
-    const double work = getKernel().takeThermostatWork(*context);
-    stepState.thermostatWork += work;
-    // The heat of RigidBodyIntegrator is its thermostat's work over the steps that measured it.
-    if (measureHeat)
-        stepState.heat += work;
+    // The heat is the thermostat's work over the steps that measured it.
+    OpenMMRigid::takeThermostatWork(*context, getKernel(), stepState, measureHeat);
+}
+
+bool RigidBodyIntegratorBase::barostatMayMove(long long call) const {
+    for (const auto& barostat : barostats)
+        if ((call - barostat.second)%barostat.first == 0)
+            return true;
+    return false;
 }
 
 void RigidBodyIntegratorBase::step(int steps) {
@@ -710,30 +749,57 @@ void RigidBodyIntegratorBase::step(int steps) {
     // groups overwrites them).
     restoredCheckpoint = false;
     for (int i = 0; i < steps; ++i) {
+        const bool previousEnergyKnown = stepState.potentialKnown;
+        const double previousEnergy = stepState.potentialEnergy;
+        stateUpdates++;
         if (context->updateContextState()) {
             // A Force (e.g. a barostat) moved the particles: re-fit the bodies to them.
             forcesAreValid = false;
             needsProjection = true;
+            if (!barostatMayMove(stateUpdates))
+                for (auto& barostat : barostats)
+                    barostat.second = stateUpdates%barostat.first;  // a move where none was expected: count from it
         }
         Vec3 box[3];
-        makeBodiesCurrent(box);
-        // Shadow work needs the potential energy the step starts from: the last step's, or evaluated here.
-        // The accuracy check measures in episodes (internal/AccuracyCheck.h).
+        bool moved;
+        makeBodiesCurrent(box, &moved);
         // A run taken back to before the check fired (a State or checkpoint loaded) is judged again.
         if (accuracyMonitor.firedAfter(context->getTime()))
             accuracyMonitor.rearm();
+        // The accuracy check measures in episodes (internal/AccuracyCheck.h), reading the energy at
+        // its samples only: between them, the shadow work is the change of the potential energy less
+        // the thermostat's work and what changed the energy between steps (the tally of the kinetic
+        // energy at the start and end of each step; the potential energy before and after a move).
         AccuracyCheck::Setting setting;
+        checkingStep = false;
+        bool sample = false, outsideEnergy = false;
         if (accuracyCheck && !andersenThermostat) {
             setting = getAccuracySetting();
             checkingStep = accuracyMonitor.wantsStep(setting, context->getTime());
         }
+        if (checkingStep) {
+            if (moved && accuracyMonitor.inWindow()) {
+                if (previousEnergyKnown)
+                    outsideEnergy = true;
+                else
+                    accuracyMonitor.restart();  // a move whose energy change is unknown: a new window
+            }
+            sample = accuracyMonitor.wantsSample(setting);
+        }
         else
-            checkingStep = false;
-        const bool measure = measuresShadowWork();
-        if (!forcesAreValid || (measure && !stepState.potentialKnown))
-            evaluateForces(box, measure);
+            accuracyMonitor.restart();
+        // The energy at the end of the step: for a sample, and before a barostat may move.
+        energyWanted = sample || (checkingStep && barostatMayMove(stateUpdates + 1));
+        if (!forcesAreValid || (measureShadowWork && !stepState.potentialKnown))
+            evaluateForces(box, measureShadowWork || outsideEnergy);
+        if (outsideEnergy)
+            checkedLedger += stepState.potentialEnergy - previousEnergy;
         try {
+            if (checkingStep)
+                stepKernel.tallyKineticEnergy(*context, 1.0);
             executeStep(*context);
+            if (checkingStep)
+                stepKernel.tallyKineticEnergy(*context, -1.0);
         }
         catch (...) {
             // The step stopped part way (an unstable simulation): the Context goes back to the state
@@ -745,14 +811,15 @@ void RigidBodyIntegratorBase::step(int steps) {
             throw;
         }
         bool fired = false;
-        if (checkingStep) {
-            checkedWork += stepState.stepShadowWork;
+        if (sample) {
+            takeThermostatWork();
+            double kinetic;
+            checkedLedger += stepKernel.takeTally(*context, kinetic);
+            const double shadowWork = stepState.potentialEnergy - stepState.thermostatWork - checkedLedger;
             const bool quiet = accuracyMonitor.getMessage().empty();
-            accuracyMonitor.record(setting, context->getTime(), checkedWork, stepState.stepShadowWork, stepState.stepKinetic);
+            accuracyMonitor.record(setting, context->getTime(), shadowWork, kinetic);
             fired = quiet && !accuracyMonitor.getMessage().empty();
         }
-        else
-            accuracyMonitor.restart();
         forcesAreValid = true;
         for (int k = 0; k < 3; k++)
             forcesBox[k] = box[k];

@@ -140,6 +140,14 @@ private:
 
 } // namespace
 
+double takeThermostatWork(ContextImpl& context, IntegrateRigidBodyStepKernel& kernel, StepState& state, bool measureHeat) {
+    const double work = kernel.takeThermostatWork(context);
+    state.thermostatWork += work;
+    if (measureHeat)
+        state.heat += work;
+    return work;
+}
+
 uint64_t chooseRandomSeed(int requested) {
     if (requested != 0)
         return (uint64_t) (uint32_t) requested;
@@ -169,7 +177,7 @@ void stepRigidBodyIntegrator(ContextImpl& context, IntegrateRigidBodyStepKernel&
     const SplittingScheme& scheme = splittingScheme(integrator.getSplitting());
     const double dt = integrator.getStepSize(), tolerance = integrator.getConstraintTolerance();
     const RigidBodyOptions::RotationMethod method = integrator.getRotationMethod();
-    const bool measureShadowWork = integrator.measuresShadowWork();
+    const bool measureShadowWork = integrator.getMeasureShadowWork(), energy = integrator.wantsEnergy();
     kernel.beginStep(context, currentGeometry(context, bodies));
     const double startEnergy = startingEnergy(context, kernel, state, measureShadowWork, integrator.getClassName());
     // kick(a_0 dt) drift(b_0 dt) ... drift(b_{s-1} dt) kick(a_s dt): the first kick uses the forces
@@ -183,7 +191,7 @@ void stepRigidBodyIntegrator(ContextImpl& context, IntegrateRigidBodyStepKernel&
             const bool last = (stage == scheme.numDrifts - 1);
             if (last)
                 kernel.beforeLastForces(context);
-            potential = evaluateForces(context, integrator.getIntegrationForceGroups(), last && measureShadowWork);
+            potential = evaluateForces(context, integrator.getIntegrationForceGroups(), last && energy);
         }
         kernel.closingKick(context, scheme.kicks[scheme.numDrifts]*dt, tolerance, -1);
     }
@@ -191,14 +199,14 @@ void stepRigidBodyIntegrator(ContextImpl& context, IntegrateRigidBodyStepKernel&
         // Multiple time steps: the splitting's kicks with the slowest forces (slot 0), each of its
         // drifts the nest of the faster levels (InnerLevels), in which the bodies no fast force
         // reaches drift once, whole, with their kick.
-        InnerLevels inner(context, kernel, levels, method, tolerance, measureShadowWork);
+        InnerLevels inner(context, kernel, levels, method, tolerance, energy);
         for (int stage = 0; stage < scheme.numDrifts; stage++) {
             const double kick = scheme.kicks[stage]*dt, drift = scheme.drifts[stage]*dt;
             const bool last = (stage == scheme.numDrifts - 1);
             kernel.kickAndDrift(context, kick, drift, method, tolerance, 0, SlowBodies);
             kernel.kickAndDrift(context, kick, 0.0, method, tolerance, 0, FastBodies);
             potential = inner.drift(1, drift, NULL, last, NULL);
-            potential += inner.evaluate(0, last && measureShadowWork);
+            potential += inner.evaluate(0, last && energy);
         }
         kernel.closingKick(context, scheme.kicks[scheme.numDrifts]*dt, tolerance, 0);
     }
@@ -224,14 +232,10 @@ void stepRigidBodyIntegrator(ContextImpl& context, IntegrateRigidBodyStepKernel&
     }
     else if (measureShadowWork)
         kinetic = kineticEnergy(context, kernel);
-    if (measureShadowWork) {
-        state.stepShadowWork = kinetic + potential - startEnergy;
-        state.stepKinetic = kinetic;
-        if (integrator.getMeasureShadowWork())
-            state.shadowWork += state.stepShadowWork;
-    }
+    if (measureShadowWork)
+        state.shadowWork += kinetic + potential - startEnergy;
     state.potentialEnergy = potential;
-    state.potentialKnown = measureShadowWork;
+    state.potentialKnown = energy;
     kernel.finishStep(context, dt);
 }
 
@@ -240,7 +244,7 @@ void stepRigidBodyLangevinIntegrator(ContextImpl& context, IntegrateRigidBodySte
     const double dt = integrator.getStepSize(), tolerance = integrator.getConstraintTolerance();
     const double friction = integrator.getFriction();
     const RigidBodyOptions::RotationMethod method = integrator.getRotationMethod();
-    const bool measureShadowWork = integrator.measuresShadowWork(), measureHeat = integrator.getMeasureHeat();
+    const bool measureShadowWork = integrator.getMeasureShadowWork(), energy = integrator.wantsEnergy();
     kernel.beginStep(context, currentGeometry(context, bodies));
     const double startEnergy = startingEnergy(context, kernel, state, measureShadowWork, integrator.getClassName());
     // LFMiddle (Z. Zhang, X. Liu, K. Yan, M. E. Tuckerman and J. Liu, J. Phys. Chem. A 123, 6056
@@ -251,20 +255,12 @@ void stepRigidBodyLangevinIntegrator(ContextImpl& context, IntegrateRigidBodySte
     // (getVelocityTimeOffset() = dt/2), whose distribution is canonical where BAOAB's on-step
     // velocities read stiff modes (the librations of water) cold. With no friction O is the
     // identity and is left out: the step is then leapfrog Verlet with exact drifts.
-    double heat = 0.0;
-    // The O stage, where the heat is the kinetic energy it adds: read on either side of it, with the
-    // bodies' momenta written to their particles first (which changes no momentum).
+    // The O stage: its heat, the kinetic energy it adds, is summed by the kernel where the momenta are,
+    // if the step measures it (for getHeat(), getShadowWork(), or the accuracy check).
+    const bool heat = integrator.wantsHeat();
     const function<void()> thermostat = [&]() {
-        const bool measure = (measureShadowWork || measureHeat);
-        if (measure) {
-            kernel.writeBodyVelocities(context);
-            heat = -kineticEnergy(context, kernel);
-        }
-        kernel.thermalize(context, exp(-friction*dt), BOLTZ*integrator.getTemperature(), state.seed, state.randomCounter++, tolerance);
-        if (measure) {
-            kernel.writeBodyVelocities(context);
-            heat += kineticEnergy(context, kernel);
-        }
+        kernel.thermalize(context, exp(-friction*dt), BOLTZ*integrator.getTemperature(), state.seed, state.randomCounter++, tolerance,
+                          heat);
     };
     double potential;
     const vector<TimeStepLevel>& levels = integrator.getTimeStepLevels();
@@ -274,7 +270,7 @@ void stepRigidBodyLangevinIntegrator(ContextImpl& context, IntegrateRigidBodySte
             thermostat();
         kernel.kickAndDrift(context, 0.0, 0.5*dt, method, tolerance, -1, AllBodies);
         kernel.beforeLastForces(context);
-        potential = evaluateForces(context, integrator.getIntegrationForceGroups(), measureShadowWork);
+        potential = evaluateForces(context, integrator.getIntegrationForceGroups(), energy);
     }
     else {
         // Multiple time steps: the kick by the slowest forces (slot 0), then the nest of the faster
@@ -282,27 +278,23 @@ void stepRigidBodyLangevinIntegrator(ContextImpl& context, IntegrateRigidBodySte
         // forces do not reach sees one O between two half drifts); the bodies no fast force reaches
         // drift in two halves around it. The velocities between steps lack half a kick of the
         // slowest forces only.
-        InnerLevels inner(context, kernel, levels, method, tolerance, measureShadowWork);
+        InnerLevels inner(context, kernel, levels, method, tolerance, energy);
         kernel.kickAndDrift(context, dt, 0.5*dt, method, tolerance, 0, SlowBodies);
         kernel.kickAndDrift(context, dt, 0.0, method, tolerance, 0, FastBodies);
         const function<void()> secondHalf = [&]() {
             kernel.kickAndDrift(context, 0.0, 0.5*dt, method, tolerance, 0, SlowBodies);
         };
         potential = inner.drift(1, dt, friction > 0.0 ? &thermostat : NULL, true, &secondHalf);
-        potential += inner.evaluate(0, measureShadowWork);
+        potential += inner.evaluate(0, energy);
     }
     // No kick: the rigid velocities written to the body particles, the constraints among free particles applied to velocities.
     kernel.closingKick(context, 0.0, tolerance, -1);
-    if (measureHeat)
-        state.heat += heat;
     if (measureShadowWork) {
-        state.stepKinetic = kineticEnergy(context, kernel);
-        state.stepShadowWork = state.stepKinetic + potential - startEnergy - heat;
-        if (integrator.getMeasureShadowWork())
-            state.shadowWork += state.stepShadowWork;
+        const double heat = takeThermostatWork(context, kernel, state, integrator.getMeasureHeat());
+        state.shadowWork += kineticEnergy(context, kernel) + potential - startEnergy - heat;
     }
     state.potentialEnergy = potential;
-    state.potentialKnown = measureShadowWork;
+    state.potentialKnown = energy;
     kernel.finishStep(context, dt);
 }
 

@@ -33,11 +33,18 @@ namespace OpenMMRigid {
  * It fires when a figure is above its limit in two windows in a row (so that one window's
  * fluctuation does not), once; the limits and their measurements: the README, "The accuracy check".
  *
- * It measures in episodes, so that it costs little (the shadow work needs the potential energy at
- * every step): one from the first step of a Context, and from every change of the setting, of at
- * least two windows, continued for as long as the last window is above a limit; then none for
- * PauseTime ps. A run that goes wrong from its start (a step too large for it) is told within two
- * windows; one that goes wrong later, within PauseTime.
+ * It measures in episodes: one from the first step of a Context, and from every change of the
+ * setting, of at least two windows, continued for as long as the last window is above a limit; then
+ * none for PauseTime ps. A run that goes wrong from its start (a step too large for it) is told within
+ * two windows; one that goes wrong later, within PauseTime.
+ *
+ * Within an episode it reads samples, SamplesPerWindow a window (every sampleStride() steps), not
+ * every step: the shadow work telescopes, so that between two samples it is the change of the
+ * potential energy less what the steps' stochastic stages and the world outside the step added
+ * (the thermostat's heat, summed by the kernel where the momenta are; the kinetic energy a
+ * CMMotionRemover takes out between steps; a barostat's move), and the potential energy is evaluated
+ * only at the samples (RigidBodyIntegratorBase::step()). An ordinary step of an episode then costs two
+ * kinetic-energy sums, which stay on a GPU, and no energy evaluation.
  */
 class OPENMM_EXPORT_RIGID AccuracyCheck {
 public:
@@ -45,6 +52,8 @@ public:
     static constexpr double WindowTime = 2.0;
     /** The least number of steps in a window. */
     static constexpr int MinimumSteps = 200;
+    /** The number of samples a window of the least length reads (one every sampleStride() steps). */
+    static constexpr int SamplesPerWindow = 40;
     /** The time between episodes, in ps. */
     static constexpr double PauseTime = 36.0;
     /** The limit of the heating of a Langevin run (fraction of the bath's temperature). */
@@ -73,22 +82,35 @@ public:
         }
     };
     /**
-     * Whether the step about to be taken, of this setting, from this time (ps), is to be measured and
-     * recorded: within an episode.
+     * Whether the step about to be taken, of this setting, from this time (ps), is to be measured:
+     * within an episode.
      */
     bool wantsStep(const Setting& setting, double time);
     /**
-     * One step taken: its setting, the time after it (ps), the shadow work summed over the steps so far
-     * (kJ/mol, any origin) and that of this step, and the kinetic energy after it (kJ/mol).
+     * Whether the step about to be taken (one wantsStep() accepted) ends at a sample, to be given to
+     * record(): the first step of a window (whose end is the window's origin), then every
+     * sampleStride() steps.
      */
-    void record(const Setting& setting, double time, double shadowWork, double stepWork, double kinetic);
-    /** Forget the window in progress (a step that did not finish, a new Context). */
+    bool wantsSample(const Setting& setting);
+    /** Whether a window is in progress: the shadow work since its origin must then be accounted for. */
+    bool inWindow() const {
+        return started;
+    }
+    /** The number of steps from one sample to the next at this setting: a window reads about SamplesPerWindow. */
+    static int sampleStride(const Setting& setting);
+    /**
+     * A sample, after the step wantsSample() asked for: its setting, the time (ps), the shadow work
+     * summed since the window's origin (kJ/mol, any origin; RigidBodyIntegratorBase::step()), and the
+     * kinetic energy (kJ/mol).
+     */
+    void record(const Setting& setting, double time, double shadowWork, double kinetic);
+    /** Forget the window in progress (a step that did not finish or was not measured, a new Context). */
     void restart();
     /**
      * The state was set from outside (positions, velocities, a checkpoint): the windows start again,
-     * after the next step, whose shadow work carries the jump from the state set to the integrator's
-     * own (velocities drawn for one time read at another: a Langevin step's first kick from
-     * canonical velocities adds about (omega dt)^2 kT / 2 per degree of freedom).
+     * with the origin after the next step, whose shadow work carries the jump from the state set to
+     * the integrator's own (velocities drawn for one time read at another: a Langevin step's first
+     * kick from canonical velocities adds about (omega dt)^2 kT / 2 per degree of freedom).
      */
     void stateSet();
     /** The message of the signal once it has fired; empty before. */
@@ -119,11 +141,13 @@ private:
     void closeWindow();
     Setting setting;
     bool started = false;
-    double startTime = 0.0, startWork = 0.0, lastStepWork = 0.0;
+    double startTime = 0.0, startWork = 0.0;
+    /** The steps left to the next sample (0: the next step ends at one). */
+    int stepsToSample = 0;
     // Sums over the window of t, t^2, w, w^2, t w, K, K^2, with t and w from the window's start.
     double n = 0, st = 0, stt = 0, sw = 0, sww = 0, stw = 0, sk = 0, skk = 0;
     int windowsAbove = 0, windowsInEpisode = 0;
-    bool inEpisode = true, skipNext = false;
+    bool inEpisode = true;
     double nextEpisode = 0.0;
     double lastFigure = std::numeric_limits<double>::quiet_NaN(), lastDrift = std::numeric_limits<double>::quiet_NaN(), lastTime = 0.0;
     double firedTime = 0.0;

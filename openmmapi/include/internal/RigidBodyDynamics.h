@@ -162,7 +162,9 @@ public:
      * single-particle body has no rotation. The xi_k are the body-frame components of a lab-frame
      * standard normal vector, so that the noise does not depend on the choice of principal axes.
      * Free particles: v <- c v + sqrt((1 - c^2) kT / m) xi, then the velocity constraints among
-     * them. Body particle velocities are written by the closing kick, as always.
+     * them. Body particle velocities are written by the closing kick, as always. Returns the heat,
+     * the kinetic energy the stage added (as computeKineticEnergies() would sum it before and after:
+     * each body's from its momenta, in its own, possibly raised, moments).
      *
      * Body b draws its six deviates (three for V, three for L) from NormalStream(seed, b, step);
      * free particle i (in the order of RigidBodySystem::getFreeParticles()) its three from
@@ -175,8 +177,8 @@ public:
      * @param step                 the counter of the random numbers: a different value for every call
      * @param constraintTolerance  the tolerance of the constraints among free particles
      */
-    void thermalize(std::vector<OpenMM::Vec3>& positions, std::vector<OpenMM::Vec3>& velocities, double c, double kT,
-                    uint64_t seed, uint64_t step, double constraintTolerance);
+    double thermalize(std::vector<OpenMM::Vec3>& positions, std::vector<OpenMM::Vec3>& velocities, double c, double kT,
+                      uint64_t seed, uint64_t step, double constraintTolerance);
     /**
      * Scale every momentum (bodies' linear and angular, free particles') by alpha, after the closing
      * kick: the stochastic velocity rescaling of RigidBodyIntegrator's thermostat. The velocity
@@ -343,6 +345,8 @@ private:
     HostConstraints* constraints;
     StepGeometry geometry;
     std::vector<BodyState> states;
+    /** Each body's heat in the last thermalize(), summed in body order after the threads. */
+    std::vector<double> bodyHeat;
     std::vector<double> inverseMasses;
     std::vector<OpenMM::Vec3> previousPositions;
     /** The body particles' velocities as this class last wrote or read them, consistent with the states (the entries of other particles are not kept). */

@@ -25,24 +25,30 @@ struct StepGeometry;
 struct StepState {
     uint64_t seed = 0, randomCounter = 0;
     /**
-     * The thermostat's work, in kJ/mol, up to the last time it was taken from the kernel, which sums
-     * it step by step where the momenta are (IntegrateRigidBodyStepKernel::rescaleMomenta()); what
-     * the kernel holds is added (to the heat too, while measured) before either is read, saved or
-     * reset (RigidBodyIntegratorBase::takeThermostatWork()), and dropped when a checkpoint replaces
-     * this state.
+     * The thermostat's work, in kJ/mol (the Bussi thermostat's, or the heat of the Ornstein-Uhlenbeck
+     * stages), up to the last time it was taken from the kernel, which sums it step by step where the
+     * momenta are (IntegrateRigidBodyStepKernel::rescaleMomenta() and thermalize()); what the kernel
+     * holds is added (to the heat too, while measured) before either is read, saved or reset
+     * (takeThermostatWork()), and dropped when a checkpoint replaces this state.
      */
     double thermostatWork = 0.0;
     /** The energy change of the deterministic stages and of the stochastic ones, in kJ/mol, summed while measured. */
     double shadowWork = 0.0, heat = 0.0;
     /**
      * The potential energy of the integration force groups at the current positions, in kJ/mol,
-     * valid if potentialKnown: from the step's last force evaluation, while shadow work is measured.
+     * valid if potentialKnown: from the step's last force evaluation, if it asked for the energy
+     * (RigidBodyIntegratorBase::wantsEnergy()).
      */
     double potentialEnergy = 0.0;
     bool potentialKnown = false;
-    /** The last step's shadow work and the kinetic energy after it, in kJ/mol, if it measured them (for the accuracy check). */
-    double stepShadowWork = 0.0, stepKinetic = 0.0;
 };
+
+/**
+ * Take the thermostat's work the kernel has summed since it was last taken into state.thermostatWork,
+ * and into state.heat if measureHeat; returns it. On a GPU this waits for the device.
+ */
+OPENMM_EXPORT_RIGID double takeThermostatWork(OpenMM::ContextImpl& context, IntegrateRigidBodyStepKernel& kernel, StepState& state,
+                                              bool measureHeat);
 
 /**
  * The seed of a new Context's random numbers: the integrator's, or if that is 0 (as in OpenMM's
@@ -77,8 +83,9 @@ OPENMM_EXPORT_RIGID void stepRigidBodyIntegrator(OpenMM::ContextImpl& context, I
  * positions and velocities half a step behind them; on exit, the forces at the new positions and
  * the velocities half a step behind those.
  *
- * Heat: the kinetic energy the Ornstein-Uhlenbeck stage adds. Shadow work: the rest of the step's
- * change of K + U, which is the kick's kinetic energy and the drifts' potential energy.
+ * Heat: the kinetic energy the Ornstein-Uhlenbeck stage adds, which the kernel sums as the
+ * thermostat's work. Shadow work: the rest of the step's change of K + U, which is the kick's kinetic
+ * energy and the drifts' potential energy.
  */
 OPENMM_EXPORT_RIGID void stepRigidBodyLangevinIntegrator(OpenMM::ContextImpl& context, IntegrateRigidBodyStepKernel& kernel,
         const RigidBodyLangevinIntegrator& integrator, const RigidBodySystem& bodies, StepState& state);

@@ -47,11 +47,12 @@ public:
                       double constraintTolerance, int forces, BodySet set) override;
     void closingKick(OpenMM::ContextImpl& context, double kick, double constraintTolerance, int forces) override;
     void thermalize(OpenMM::ContextImpl& context, double c, double kT, uint64_t seed, uint64_t counter,
-                    double constraintTolerance) override;
-    void writeBodyVelocities(OpenMM::ContextImpl& context) override;
+                    double constraintTolerance, bool heat) override;
     void rescaleMomenta(OpenMM::ContextImpl& context, double targetKinetic, int dof, double c, double r1, double rest) override;
     void getRescalingEnergies(OpenMM::ContextImpl& context, double& kinetic, double& newKinetic) override;
     double takeThermostatWork(OpenMM::ContextImpl& context) override;
+    void tallyKineticEnergy(OpenMM::ContextImpl& context, double sign) override;
+    double takeTally(OpenMM::ContextImpl& context, double& kinetic) override;
     void computeKineticEnergies(OpenMM::ContextImpl& context, double& translational, double& rotational) override;
     void computeKickedKineticEnergies(OpenMM::ContextImpl& context, double kick, double constraintTolerance, int forces,
                                       double& translational, double& rotational) override;

@@ -24,6 +24,9 @@ const int sumThreads = 128;
 /** The error codes of the kernels (rigidBodies.cc). */
 enum { ErrorNone = 0, ErrorBodyNotFinite = 1, ErrorBodyMoves = 2, ErrorParticleMoves = 3 };
 
+/** The modes of rigidSumPairs (RIGID_SUM_PLAIN ... in rigidBodies.cc). */
+enum { SumPlain = 0, SumRescale = 1, SumHeat = 2, SumTally = 3 };
+
 /**
  * How many steps apart ComputeContext::reorderAtoms() reorders the atoms (OpenMM 8.6.1,
  * platforms/common/src/ComputeContext.cpp: "stepsSinceReorder < 250"). The kernel calls
@@ -134,8 +137,12 @@ struct CommonIntegrateRigidBodyStepKernel::Impl {
      * [2] K', [3] the work sum of K' - K since the host last took it.
      */
     ComputeArray rescaling;
-    /** Whether a rescaling ran since the work was last taken, and whether the device's sum holds only work already taken. */
-    bool workPending = false, restartWork = false;
+    /**
+     * Whether a rescaling or thermalization ran since the work was last taken, and whether the
+     * device's sum holds only work already taken; the same for the tally of tallyKineticEnergy()
+     * (rescaling[4], and [5] the kinetic energy its last call summed).
+     */
+    bool workPending = false, restartWork = false, tallyPending = false, restartTally = false;
     ComputeArray startStates, startPosq, startPosqCorrection, startVelm;
     /** The bodies of each BodySet, by index (RigidBodySystem::getBodySet()), and how many each has. */
     ComputeArray bodySets[3];
@@ -155,7 +162,8 @@ struct CommonIntegrateRigidBodyStepKernel::Impl {
         return *savedForces[forces];
     }
     ComputeKernel updateAtomOrder, recordVelocities, kickDrift, kickDriftFree, finishFreeDrift, closingKick, kickFree;
-    ComputeKernel thermalizeBodies, thermalizeFree, scaleBodies, scaleFree, kineticEnergies, sumPairs, sumRescale, fitTranslation;
+    ComputeKernel thermalizeBodies, thermalizeFree, freeKineticEnergies, scaleBodies, scaleFree, kineticEnergies, sumPairs, sumRescale;
+    ComputeKernel sumAccumulate, fitTranslation;
     ComputeKernel projectBodyVelocities, kickedKineticEnergies;
     /** The velocities while computeKickedKineticEnergies() kicks the free particles' (allocated on first use). */
     ComputeArray savedVelm;
@@ -440,8 +448,8 @@ void CommonIntegrateRigidBodyStepKernel::initialize(ContextImpl& context, RigidB
     d.statusRead = cc.createEvent();
     d.energies.initialize<double>(cc, 2*max(1, d.numBodies + d.numFree), "rigidKineticEnergies");
     d.sums.initialize<double>(cc, 2, "rigidKineticEnergySums");
-    d.rescaling.initialize<double>(cc, 4, "rigidRescaling");
-    d.rescaling.upload(vector<double>{1.0, 0.0, 0.0, 0.0});
+    d.rescaling.initialize<double>(cc, 6, "rigidRescaling");
+    d.rescaling.upload(vector<double>{1.0, 0.0, 0.0, 0.0, 0.0, 0.0});
     d.startPosq.initialize(cc, cc.getPosq().getSize(), cc.getPosq().getElementSize(), "rigidStartPosq");
     if (cc.getUseMixedPrecision())
         d.startPosqCorrection.initialize(cc, cc.getPosqCorrection().getSize(), cc.getPosqCorrection().getElementSize(),
@@ -538,6 +546,7 @@ void CommonIntegrateRigidBodyStepKernel::initialize(ContextImpl& context, RigidB
     d.thermalizeBodies->addArg(d.states);
     for (int i = 0; i < 4; i++)
         d.thermalizeBodies->addArg();  // c, noise, seed, counter (4 to 7)
+    d.thermalizeBodies->addArg(d.energies);
 
     d.thermalizeFree = program->createKernel("rigidThermalizeFree");
     d.thermalizeFree->addArg(d.numFree);
@@ -547,6 +556,13 @@ void CommonIntegrateRigidBodyStepKernel::initialize(ContextImpl& context, RigidB
     d.thermalizeFree->addArg(velm);
     for (int i = 0; i < 4; i++)
         d.thermalizeFree->addArg();  // c, noise, seed, counter (5 to 8)
+    d.thermalizeFree->addArg(d.energies);
+
+    d.freeKineticEnergies = program->createKernel("rigidFreeKineticEnergies");
+    d.freeKineticEnergies->addArg(d.numFree);
+    d.freeKineticEnergies->addArg(d.numBodies);
+    for (ArrayInterface* array : initializer_list<ArrayInterface*>{&d.freeParticles, &d.currentIndex, &velm, &d.energies})
+        d.freeKineticEnergies->addArg(*array);
 
     d.scaleBodies = program->createKernel("rigidScaleMomenta");
     d.scaleBodies->addArg(d.numBodies);
@@ -578,21 +594,24 @@ void CommonIntegrateRigidBodyStepKernel::initialize(ContextImpl& context, RigidB
     d.kickedKineticEnergies->addArg(d.energies);
     d.kickedKineticEnergies->addArg();  // kick (14)
 
-    // The same kernel twice: the plain sums, and the sums with the thermostat's step after them.
+    // The same kernel three times: the plain sums, the sums with the thermostat's step after them, and
+    // the sums added to the heat or the tally (its mode set at each call).
     d.sumPairs = program->createKernel("rigidSumPairs");
     d.sumRescale = program->createKernel("rigidSumPairs");
-    for (ComputeKernel* kernel : {&d.sumPairs, &d.sumRescale}) {
+    d.sumAccumulate = program->createKernel("rigidSumPairs");
+    for (ComputeKernel* kernel : {&d.sumPairs, &d.sumRescale, &d.sumAccumulate}) {
         (*kernel)->addArg(d.numBodies + d.numFree);
         (*kernel)->addArg(d.energies);
         (*kernel)->addArg(d.sums);
-        (*kernel)->addArg(kernel == &d.sumRescale ? 1 : 0);  // rescale
+        (*kernel)->addArg(kernel == &d.sumRescale ? SumRescale : SumPlain);  // mode (3)
         (*kernel)->addArg(0.0);                              // targetKinetic (4)
         (*kernel)->addArg(0);                                // dof (5)
         (*kernel)->addArg(1.0);                              // c (6)
         (*kernel)->addArg(0.0);                              // r1 (7)
         (*kernel)->addArg(0.0);                              // rest (8)
-        (*kernel)->addArg(0);                                // restartWork (9)
+        (*kernel)->addArg(0);                                // restart (9)
         (*kernel)->addArg(d.rescaling);
+        (*kernel)->addArg(1.0);                              // sign (11)
     }
 
     d.projectionFailed.initialize<int>(cc, 2, "rigidProjectionFailed");
@@ -825,9 +844,11 @@ void CommonIntegrateRigidBodyStepKernel::closingKick(ContextImpl& context, doubl
 }
 
 void CommonIntegrateRigidBodyStepKernel::thermalize(ContextImpl& context, double c, double kT, uint64_t seed, uint64_t counter,
-                                                    double constraintTolerance) {
+                                                    double constraintTolerance, bool heat) {
     Impl& d = *impl;
     ContextSelector selector(cc);
+    if (d.numBodies + d.numFree == 0)
+        return;
     const double noise = sqrt((1.0 - c*c)*kT);
     if (d.numBodies > 0) {
         d.thermalizeBodies->setArg(4, c);
@@ -845,18 +866,16 @@ void CommonIntegrateRigidBodyStepKernel::thermalize(ContextImpl& context, double
     }
     if (d.solver)
         d.solver->applyVelocityConstraints(constraintTolerance);
-}
-
-void CommonIntegrateRigidBodyStepKernel::writeBodyVelocities(ContextImpl& context) {
-    Impl& d = *impl;
-    ContextSelector selector(cc);
-    // rigidClosingKick with no kick: the rigid velocities written (and recorded as written), no
-    // velocity constraints, and no status check (that waits for the step's last force evaluation).
-    if (d.numBodies > 0) {
-        d.closingKick->setArg(10, cc.getLongForceBuffer());  // not read without a kick
-        d.closingKick->setArg(12, 0.0);
-        d.closingKick->execute(d.numBodies);
-    }
+    if (!heat)
+        return;
+    if (d.solver)
+        d.freeKineticEnergies->execute(d.numFree);
+    // The heat each thread wrote, summed into the thermostat's work on the device.
+    d.sumAccumulate->setArg(3, (int) SumHeat);
+    d.sumAccumulate->setArg(9, d.restartWork ? 1 : 0);
+    d.sumAccumulate->execute(sumThreads, sumThreads);
+    d.restartWork = false;
+    d.workPending = true;
 }
 
 void CommonIntegrateRigidBodyStepKernel::rescaleMomenta(ContextImpl& context, double targetKinetic, int dof, double c, double r1,
@@ -890,6 +909,34 @@ void CommonIntegrateRigidBodyStepKernel::getRescalingEnergies(ContextImpl& conte
     d.rescaling.download(values);
     kinetic = values[1];
     newKinetic = values[2];
+}
+
+void CommonIntegrateRigidBodyStepKernel::tallyKineticEnergy(ContextImpl& context, double sign) {
+    Impl& d = *impl;
+    ContextSelector selector(cc);
+    if (d.numBodies + d.numFree == 0)
+        return;
+    d.kineticEnergies->execute(d.numBodies + d.numFree);
+    d.sumAccumulate->setArg(3, (int) SumTally);
+    d.sumAccumulate->setArg(9, d.restartTally ? 1 : 0);
+    d.sumAccumulate->setArg(11, sign);
+    d.sumAccumulate->execute(sumThreads, sumThreads);
+    d.restartTally = false;
+    d.tallyPending = true;
+}
+
+double CommonIntegrateRigidBodyStepKernel::takeTally(ContextImpl& context, double& kinetic) {
+    Impl& d = *impl;
+    kinetic = 0.0;
+    if (!d.tallyPending)
+        return 0.0;
+    ContextSelector selector(cc);
+    vector<double> values;
+    d.rescaling.download(values);
+    d.tallyPending = false;
+    d.restartTally = true;
+    kinetic = values[5];
+    return values[4];
 }
 
 double CommonIntegrateRigidBodyStepKernel::takeThermostatWork(ContextImpl& context) {

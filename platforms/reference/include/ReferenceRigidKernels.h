@@ -31,11 +31,13 @@ public:
     void kickAndDrift(OpenMM::ContextImpl& context, double kick, double drift, RigidBodyOptions::RotationMethod method,
                       double constraintTolerance, int forces, BodySet set);
     void closingKick(OpenMM::ContextImpl& context, double kick, double constraintTolerance, int forces);
-    void thermalize(OpenMM::ContextImpl& context, double c, double kT, uint64_t seed, uint64_t counter, double constraintTolerance);
-    void writeBodyVelocities(OpenMM::ContextImpl& context);
+    void thermalize(OpenMM::ContextImpl& context, double c, double kT, uint64_t seed, uint64_t counter, double constraintTolerance,
+                    bool heat);
     void rescaleMomenta(OpenMM::ContextImpl& context, double targetKinetic, int dof, double c, double r1, double rest);
     void getRescalingEnergies(OpenMM::ContextImpl& context, double& kinetic, double& newKinetic);
     double takeThermostatWork(OpenMM::ContextImpl& context);
+    void tallyKineticEnergy(OpenMM::ContextImpl& context, double sign);
+    double takeTally(OpenMM::ContextImpl& context, double& kinetic);
     void computeKineticEnergies(OpenMM::ContextImpl& context, double& translational, double& rotational);
     void computeKickedKineticEnergies(OpenMM::ContextImpl& context, double kick, double constraintTolerance, int forces,
                                       double& translational, double& rotational);
@@ -55,8 +57,13 @@ private:
     std::vector<OpenMM::Vec3> startVelocities;
     /** The force sets of saveForces(), by slot. */
     std::vector<std::vector<OpenMM::Vec3> > savedForces;
-    /** The kinetic energies before and after the last rescaleMomenta(), and the work K' - K summed since the last takeThermostatWork(). */
+    /**
+     * The kinetic energies before and after the last rescaleMomenta(), and the work (K' - K, and the
+     * heat of thermalize()) summed since the last takeThermostatWork().
+     */
     double rescalingKinetic = 0.0, rescalingNewKinetic = 0.0, thermostatWork = 0.0;
+    /** The tally of tallyKineticEnergy() since the last takeTally(), and the kinetic energy its last call summed. */
+    double tally = 0.0, tallyKinetic = 0.0;
 };
 
 } // namespace OpenMMRigid

@@ -136,12 +136,11 @@ void ReferenceIntegrateRigidBodyStepKernel::closingKick(ContextImpl& context, do
 }
 
 void ReferenceIntegrateRigidBodyStepKernel::thermalize(ContextImpl& context, double c, double kT, uint64_t seed, uint64_t counter,
-                                                       double constraintTolerance) {
-    dynamics->thermalize(extractPositions(context), extractVelocities(context), c, kT, seed, counter, constraintTolerance);
-}
-
-void ReferenceIntegrateRigidBodyStepKernel::writeBodyVelocities(ContextImpl& context) {
-    dynamics->writeBodyVelocities(extractPositions(context), extractVelocities(context));
+                                                       double constraintTolerance, bool heat) {
+    const double added = dynamics->thermalize(extractPositions(context), extractVelocities(context), c, kT, seed, counter,
+                                              constraintTolerance);
+    if (heat)
+        thermostatWork += added;
 }
 
 void ReferenceIntegrateRigidBodyStepKernel::rescaleMomenta(ContextImpl& context, double targetKinetic, int dof, double c, double r1,
@@ -159,6 +158,20 @@ double ReferenceIntegrateRigidBodyStepKernel::takeThermostatWork(ContextImpl& co
     const double work = thermostatWork;
     thermostatWork = 0.0;
     return work;
+}
+
+void ReferenceIntegrateRigidBodyStepKernel::tallyKineticEnergy(ContextImpl& context, double sign) {
+    double translational, rotational;
+    dynamics->computeKineticEnergies(extractVelocities(context), translational, rotational);
+    tallyKinetic = translational + rotational;
+    tally += sign*tallyKinetic;
+}
+
+double ReferenceIntegrateRigidBodyStepKernel::takeTally(ContextImpl& context, double& kinetic) {
+    const double taken = tally;
+    tally = 0.0;
+    kinetic = tallyKinetic;
+    return taken;
 }
 
 void ReferenceIntegrateRigidBodyStepKernel::computeKineticEnergies(ContextImpl& context, double& translational, double& rotational) {

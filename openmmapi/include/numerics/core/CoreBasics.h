@@ -228,4 +228,9 @@ RIGID_FUNCTION double rigidRotationalEnergy(const double* moments, const double*
     return energy;
 }
 
+/** The translational kinetic energy M V^2 / 2 of a mass with velocity V. */
+RIGID_FUNCTION double rigidTranslationalEnergy(double mass, const double* velocity) {
+    return 0.5*mass*(velocity[0]*velocity[0] + velocity[1]*velocity[1] + velocity[2]*velocity[2]);
+}
+
 #endif /* OPENMMRIGID_CORE_BASICS_H_ */

@@ -452,7 +452,7 @@ KERNEL void rigidKickFree(int numFree, GLOBAL const int* RESTRICT freeParticles,
  * sqrt((1 - c^2) I_k kT) xi_k.
  */
 KERNEL void rigidThermalize(int numBodies, GLOBAL const double* RESTRICT bodyMass, GLOBAL const RigidShape* RESTRICT shapes,
-        GLOBAL double* RESTRICT states, double c, double noise, RigidUInt64 seed, RigidUInt64 counter) {
+        GLOBAL double* RESTRICT states, double c, double noise, RigidUInt64 seed, RigidUInt64 counter, GLOBAL double* RESTRICT energies) {
     for (int b = GLOBAL_ID; b < numBodies; b += GLOBAL_SIZE) {
         RigidBodyState s;
         RigidShape shape = shapes[b];
@@ -462,25 +462,36 @@ KERNEL void rigidThermalize(int numBodies, GLOBAL const double* RESTRICT bodyMas
         rigidLoadState(states, b, &s);
         rigidNormalStreamInitialize(&normal, seed, (RigidUInt32) b, counter);
         const double velocityNoise = noise/sqrt(bodyMass[b]);
+        /* The heat, as RigidBodyDynamics::thermalize sums it: energies[2 b] translational, [2 b + 1] rotational. */
+        double translational = -rigidTranslationalEnergy(bodyMass[b], s.v), rotational = 0.0;
         for (k = 0; k < 3; k++)
             s.v[k] = c*s.v[k] + velocityNoise*rigidNormalStreamNext(&normal);
+        translational += rigidTranslationalEnergy(bodyMass[b], s.v);
         for (k = 0; k < 3; k++)
             xi[k] = rigidNormalStreamNext(&normal);
         if (shape.kind != RigidKindPoint) {
             rigidMultiplyVector(s.a, s.l, bodyL);
             rigidMultiplyVector(s.a, xi, bodyXi);
+            rotational = -rigidRotationalEnergy(shape.moments, bodyL);
             for (k = 0; k < 3; k++)
                 bodyL[k] = c*bodyL[k] + noise*sqrt(shape.moments[k])*bodyXi[k];
+            rotational += rigidRotationalEnergy(shape.moments, bodyL);
             rigidMultiplyVectorTransposed(s.a, bodyL, s.l);
         }
         rigidStoreState(states, b, &s);
+        energies[2*b] = translational;
+        energies[2*b + 1] = rotational;
     }
 }
 
-/* The free particles' Ornstein-Uhlenbeck step, deviates from NormalStream(seed, numBodies + j, counter). */
+/*
+ * The free particles' Ornstein-Uhlenbeck step, deviates from NormalStream(seed, numBodies + j, counter);
+ * energies[2 (numBodies + j)] = -(kinetic energy before), [2 (numBodies + j) + 1] = the kinetic energy
+ * after (rigidFreeKineticEnergies writes it again after the velocity constraints, if any).
+ */
 KERNEL void rigidThermalizeFree(int numFree, int numBodies, GLOBAL const int* RESTRICT freeParticles,
         GLOBAL const int* RESTRICT currentIndex, GLOBAL mixed4* RESTRICT velm, double c, double noise, RigidUInt64 seed,
-        RigidUInt64 counter) {
+        RigidUInt64 counter, GLOBAL double* RESTRICT energies) {
     for (int j = GLOBAL_ID; j < numFree; j += GLOBAL_SIZE) {
         const int index = currentIndex[freeParticles[j]];
         RigidNormalStream normal;
@@ -489,9 +500,23 @@ KERNEL void rigidThermalizeFree(int numFree, int numBodies, GLOBAL const int* RE
         rigidNormalStreamInitialize(&normal, seed, (RigidUInt32) (numBodies + j), counter);
         const double velocityNoise = noise*sqrt((double) velm[index].w);
         rigidReadVelocity(velm, index, v);
+        energies[2*(numBodies + j)] = -rigidTranslationalEnergy(1.0/velm[index].w, v);
         for (k = 0; k < 3; k++)
             v[k] = c*v[k] + velocityNoise*rigidNormalStreamNext(&normal);
         rigidWriteVelocity(velm, index, v);
+        rigidReadVelocity(velm, index, v);
+        energies[2*(numBodies + j) + 1] = rigidTranslationalEnergy(1.0/velm[index].w, v);
+    }
+}
+
+/* energies[2 (numBodies + j) + 1] = the kinetic energy of free particle j now (after rigidThermalizeFree's velocity constraints). */
+KERNEL void rigidFreeKineticEnergies(int numFree, int numBodies, GLOBAL const int* RESTRICT freeParticles,
+        GLOBAL const int* RESTRICT currentIndex, GLOBAL const mixed4* RESTRICT velm, GLOBAL double* RESTRICT energies) {
+    for (int j = GLOBAL_ID; j < numFree; j += GLOBAL_SIZE) {
+        const int index = currentIndex[freeParticles[j]];
+        double v[3];
+        rigidReadVelocity(velm, index, v);
+        energies[2*(numBodies + j) + 1] = rigidTranslationalEnergy(1.0/velm[index].w, v);
     }
 }
 
@@ -633,13 +658,21 @@ KERNEL void rigidKickedKineticEnergies(int numBodies, int numFree, GLOBAL const 
 
 /*
  * sums[0] = sum of values[2 j], sums[1] = sum of values[2 j + 1]: one work group of RIGID_SUM_THREADS
- * threads. If rescale, the sums are the kinetic energy K (translation plus rotation) of a step of the
- * Bussi thermostat, and thread 0 applies rigidStochasticRescaling() to it with the deviates the host
- * drew: rescaling[0] = alpha (which rigidScaleMomenta and rigidScaleFree read), [1] = K, [2] = K',
- * and [3], the thermostat's work, += K' - K (from 0 if restartWork: the host has taken the sum).
+ * threads; then, by thread 0, as `mode` says:
+ * - RIGID_SUM_RESCALE: the sums are the kinetic energy K (translation plus rotation) of a step of the
+ *   Bussi thermostat, to which it applies rigidStochasticRescaling() with the deviates the host drew:
+ *   rescaling[0] = alpha (which rigidScaleMomenta and rigidScaleFree read), [1] = K, [2] = K', and
+ *   [3], the thermostat's work, += K' - K;
+ * - RIGID_SUM_HEAT: the sums are the heat of rigidThermalize and rigidThermalizeFree: [3] += it;
+ * - RIGID_SUM_TALLY: the sums are the kinetic energy K: [4] += sign K, [5] = K.
+ * The sum it adds to starts from 0 if `restart` (the host has taken it).
  */
-KERNEL void rigidSumPairs(int count, GLOBAL const double* RESTRICT values, GLOBAL double* RESTRICT sums, int rescale,
-        double targetKinetic, int dof, double c, double r1, double rest, int restartWork, GLOBAL double* RESTRICT rescaling) {
+#define RIGID_SUM_PLAIN 0
+#define RIGID_SUM_RESCALE 1
+#define RIGID_SUM_HEAT 2
+#define RIGID_SUM_TALLY 3
+KERNEL void rigidSumPairs(int count, GLOBAL const double* RESTRICT values, GLOBAL double* RESTRICT sums, int mode,
+        double targetKinetic, int dof, double c, double r1, double rest, int restart, GLOBAL double* RESTRICT rescaling, double sign) {
     LOCAL double first[RIGID_SUM_THREADS];
     LOCAL double second[RIGID_SUM_THREADS];
     double a = 0.0, b = 0.0;
@@ -660,14 +693,20 @@ KERNEL void rigidSumPairs(int count, GLOBAL const double* RESTRICT values, GLOBA
     if (LOCAL_ID == 0) {
         sums[0] = first[0];
         sums[1] = second[0];
-        if (rescale) {
-            /* K as RigidBodyDynamics::rescaleMomenta sums it: translation + rotation */
-            const double kinetic = first[0] + second[0];
+        /* K as RigidBodyDynamics::rescaleMomenta sums it: translation + rotation */
+        const double total = first[0] + second[0];
+        if (mode == RIGID_SUM_RESCALE) {
             double newKinetic;
-            rescaling[0] = rigidStochasticRescaling(kinetic, targetKinetic, dof, c, r1, rest, &newKinetic);
-            rescaling[1] = kinetic;
+            rescaling[0] = rigidStochasticRescaling(total, targetKinetic, dof, c, r1, rest, &newKinetic);
+            rescaling[1] = total;
             rescaling[2] = newKinetic;
-            rescaling[3] = (restartWork ? 0.0 : rescaling[3]) + (newKinetic - kinetic);
+            rescaling[3] = (restart ? 0.0 : rescaling[3]) + (newKinetic - total);
+        }
+        else if (mode == RIGID_SUM_HEAT)
+            rescaling[3] = (restart ? 0.0 : rescaling[3]) + total;
+        else if (mode == RIGID_SUM_TALLY) {
+            rescaling[4] = (restart ? 0.0 : rescaling[4]) + sign*total;
+            rescaling[5] = total;
         }
     }
 }
