@@ -249,9 +249,9 @@ public:
     /**
      * Set whether to measure the heat: the kinetic energy that the stochastic part of each step (the
      * Ornstein-Uhlenbeck stage of RigidBodyLangevinIntegrator, the rescaling of RigidBodyIntegrator's
-     * thermostat) adds, summed over the steps (see getHeat()). Off by default; for
-     * RigidBodyLangevinIntegrator it costs two kinetic energies per step, for RigidBodyIntegrator's
-     * thermostat nothing (the heat is its work, summed with it). Takes effect at the next step.
+     * thermostat) adds, summed over the steps (see getHeat()). Off by default; it costs a sum per
+     * step for RigidBodyLangevinIntegrator (which stays on a GPU) and nothing for RigidBodyIntegrator's
+     * thermostat (the heat is its work, summed with it). Takes effect at the next step.
      *
      * @param measure  true to measure it
      */
@@ -314,8 +314,8 @@ public:
     /**
      * Set whether to check, from the run itself, that the run stays in the integrator's accurate range
      * (on by default). The check reads the shadow work of the steps in episodes of at least 4 ps, one
-     * at the start and one every 40 ps (while it reads, a step costs what setMeasureShadowWork()
-     * makes it cost), and, when the step is too large for the ensemble to be right (the
+     * at the start and one every 40 ps (while it reads, it evaluates the energy at 40 samples per 2 ps
+     * window, and an ordinary step costs two kinetic-energy sums, which stay on a GPU), and, when the step is too large for the ensemble to be right (the
      * integration error heats a Langevin run's momenta more than 4 % above the bath, the energy of a
      * run without friction drifts more than 0.01 kT/ps per degree of freedom, or, with the Bussi
      * thermostat, the energy error fluctuates more than 0.06 times the kinetic energy, in two 2 ps

@@ -15,20 +15,24 @@
  * no blocking read, Bussi's thermostat included (its kinetic-energy sum and *
  * factor stay on the device), with its heat measured too; and they launch   *
  * at most two kernels more than stock. These steps are ordinary ones, with  *
- * the accuracy check off (between its episodes it reads nothing); a step    *
- * within an episode (which reads the energy and kinetic energies), a        *
- * barostat step and a reordering step are measured and printed. Exits 77    *
- * (skipped) where there is no OpenCL platform.                               *
+ * the accuracy check off (between its episodes it reads nothing). Within    *
+ * an episode (the first 4 ps of a Context) every step but the check's       *
+ * samples stalls no more than stock's (the heat and the kinetic energy's    *
+ * tally stay on the device); the samples, which read the energy, are        *
+ * counted. A barostat step and a reordering step are measured and printed.  *
+ * Exits 77 (skipped) where there is no OpenCL platform.                      *
  * -------------------------------------------------------------------------- */
 
 #include "../RigidBodyTestSystems.h"
 #include "RigidBodyIntegrator.h"
 #include "RigidBodyLangevinIntegrator.h"
+#include "internal/AccuracyCheck.h"
 #include "openmm/LangevinMiddleIntegrator.h"
 #include "openmm/MonteCarloBarostat.h"
 #include <cstdio>
 #include <initializer_list>
 #include <string>
+#include <vector>
 
 extern "C" {
 typedef struct {
@@ -46,6 +50,7 @@ struct StepCounts {
     string name;
     double stalls = 0, overlappedWaits = 0, launches = 0, transfers = 0;  // per step
     long worstStalls = 0;                                                  // the most in one step
+    std::vector<long> stepStalls;                                          // each step's
     long reorders = 0;
 };
 
@@ -62,6 +67,7 @@ StepCounts measure(const string& name, Context& context, Integrator& integrator,
         result.launches += c.kernelLaunches;
         result.transfers += c.transfers;
         result.worstStalls = std::max(result.worstStalls, c.stalls);
+        result.stepStalls.push_back(c.stalls);
     }
     result.stalls /= steps;
     result.overlappedWaits /= steps;
@@ -127,12 +133,22 @@ int main(int argc, char* argv[]) {
         const StepCounts oursBH = run("RigidBodyIntegrator + Bussi, heat measured", bussiHeat);
         print(oursBH);
 
-        // Printed only: steps within an accuracy check's episode (the first 4 ps of a Context), steps
-        // across a reorder, and steps with a barostat move (frequency 1: every step).
-        {
-            RigidBodyLangevinIntegrator checked(300.0, 1.0, 0.002);
-            print(run("RigidBodyLangevinIntegrator, accuracy check reading", checked));
-        }
+        // Steps within an accuracy check's episode (the first 4 ps of a Context): the check reads the
+        // energy at its samples (the first step, then every sampleStride() steps), nothing at the others.
+        RigidBodyLangevinIntegrator checkedLangevin(300.0, 1.0, 0.002);
+        RigidBodyIntegrator checkedBussi(0.002);
+        checkedBussi.setThermostat(300.0, 0.1);
+        RigidBodyIntegrator checkedVerlet(0.002);
+        const StepCounts checked[] = {run("RigidBodyLangevinIntegrator, in the check's episode", checkedLangevin),
+                                      run("RigidBodyIntegrator + Bussi, in the check's episode", checkedBussi),
+                                      run("RigidBodyIntegrator (Verlet), in the check's episode", checkedVerlet)};
+        for (const StepCounts& c : checked)
+            print(c);
+        AccuracyCheck::Setting setting;
+        setting.stepSize = 0.002;
+        const int stride = AccuracyCheck::sampleStride(setting);
+
+        // Printed only: steps across a reorder, and steps with a barostat move (frequency 1: every step).
         {
             RigidBodyIntegrator reordering(0.002);
             reordering.setAccuracyCheck(false);
@@ -161,6 +177,23 @@ int main(int argc, char* argv[]) {
         }
         check(oursL.stalls <= stockL.stalls && oursL.worstStalls <= stockL.worstStalls,
               "RigidBodyLangevinIntegrator: more host stalls per step than stock LangevinMiddleIntegrator's");
+        for (int k = 0; k < 3; k++) {
+            const StepCounts& stock = (k == 0 ? stockL : stockV);
+            int samples = 0;
+            double ordinaryStalls = 0;
+            for (int i = 0; i < steps; i++) {
+                const int step = warmup + 1 + i;  // 1 for the Context's first step
+                if ((step - 1)%stride == 0)
+                    samples++;
+                else {
+                    check(checked[k].stepStalls[i] <= stock.worstStalls, checked[k].name + ": step " + std::to_string(step) +
+                          ", not a sample, stalls more than stock's worst step");
+                    ordinaryStalls += checked[k].stepStalls[i];
+                }
+            }
+            check(samples >= 1 && ordinaryStalls/(steps - samples) <= stock.stalls,
+                  checked[k].name + ": more host stalls per ordinary step than stock's");
+        }
         check(oursV.launches <= stockV.launches + 2, "RigidBodyIntegrator: more than stock Verlet's launches + 2");
         check(oursB.launches <= stockV.launches + 2, "RigidBodyIntegrator + Bussi thermostat: more than stock Verlet's launches + 2");
         check(oursL.launches <= stockL.launches + 2, "RigidBodyLangevinIntegrator: more than stock Langevin's launches + 2");

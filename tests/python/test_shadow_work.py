@@ -380,6 +380,37 @@ def test_accuracy_check_is_quiet_inside_the_range(water_state, kind):
     assert fired is None and not caught, integrator.getAccuracyWarning()
 
 
+def test_accuracy_check_takes_out_the_barostat_and_the_motion_remover(water_state):
+    """The check reads the energy at its samples only, so what changes the energy between steps is
+    taken out of the shadow work: a barostat's accepted moves (the potential energy before and after
+    each) and a CMMotionRemover's (the kinetic energy at the ends of each step, tallied on the device).
+    Omelyan2 with the Bussi thermostat at 6 fs, inside its range, stays quiet under NPT; without the
+    barostat's moves taken out it fired (fluctuation 0.094, the moves' energy read as the error's). At
+    8 fs Verlet, outside its range, it still fires under NPT."""
+    system, state = water_state
+    system = openmm.XmlSerializer.clone(system)
+    system.addForce(openmm.CMMotionRemover(1))
+    barostat = openmm.MonteCarloBarostat(1 * unit.bar, 300 * unit.kelvin, 5)
+    barostat.setRandomNumberSeed(2)
+    system.addForce(barostat)
+    fired = {}
+    for splitting, dt in ((RigidBodyIntegrator.Omelyan2, 0.006), (RigidBodyIntegrator.Verlet, 0.008)):
+        integrator = RigidBodyIntegrator(dt)
+        integrator.setSplitting(splitting)
+        integrator.setThermostat(300, 1.0)
+        context = openmm.Context(system, integrator, *systems.platform_and_properties("CPU"))
+        context.setState(state)
+        volume = context.getState().getPeriodicBoxVolume()
+        with warnings.catch_warnings(record=True):
+            warnings.simplefilter("always", AccuracyWarning)
+            integrator.step(int(round(8.0 / dt)))
+        assert context.getState().getPeriodicBoxVolume() != volume, "the barostat accepted no move"
+        fired[dt] = integrator.getAccuracyWarning()
+        del context
+    assert fired[0.006] == "", fired[0.006]
+    assert "at a step of 8 fs" in fired[0.008], fired[0.008]
+
+
 def test_accuracy_check_off(water_state):
     integrator = RigidBodyLangevinIntegrator(300, 1, 0.011)
     integrator.setAccuracyCheck(False)
