@@ -415,44 +415,9 @@ def timeInterleaved(integrators, steps, repetitions):
     return wall, cpu
 
 
-# The accuracy check of the rigid integrators (setAccuracyCheck(), on by default) measures in episodes
-# (openmmapi/include/internal/AccuracyCheck.h, whose constants these are; tests/python/test_benchmarks.py
-# compares them): from a Context's first step two windows of CHECK_WINDOW_PS, each of at least
-# CHECK_MINIMUM_STEPS steps, then, while the run stays accurate, no measuring for CHECK_PAUSE_PS, and so
-# on. A step in an episode also evaluates the potential energy and the kinetic energies of the shadow
-# work (about 12 % more per step than the rest in 500 waters with PME on the CPU platform); every other
-# step costs what a step with the check off costs. So a short timing from a fresh Context measures the
-# episode, which a long run spends only a fraction checkDuty() of its steps in.
-CHECK_WINDOW_PS, CHECK_MINIMUM_STEPS, CHECK_PAUSE_PS = 2.0, 200, 36.0
-
-
-def checkDuty(stepFs):
-    """The fraction of an accurate long run's steps, at a step of stepFs fs, that the accuracy check measures."""
-    episode = 2*max(CHECK_WINDOW_PS, CHECK_MINIMUM_STEPS*stepFs*1e-3)
-    return episode/(episode + CHECK_PAUSE_PS)
-
-
-# What a timing's label gets added for the twin of episodeTwin().
-EPISODE = " (check episode)"
-
-
-def episodeTwin(integrator):
-    """For a rigid integrator whose copy will time a long run's steps outside the check's episodes: the
-    check switched off on it, and a twin (an XML copy) that measures the shadow work at every step,
-    which costs what a step in an episode costs (on RigidBodyLangevinIntegrator it also reads the heat
-    it needs). Bind both to Contexts and time them side by side; productionSeconds() combines them."""
-    twin = openmm.XmlSerializer.deserialize(openmm.XmlSerializer.serialize(integrator))
-    integrator.setAccuracyCheck(False)
-    twin.setAccuracyCheck(False)
-    twin.setMeasureShadowWork(True)
-    return twin
-
-
-def productionSeconds(paused, episode, stepFs):
-    """Seconds per step of a long accurate run with the check on (its default), from the cost of a step
-    outside the check's episodes and of one in them."""
-    duty = checkDuty(stepFs)
-    return (1.0 - duty)*paused + duty*episode
+# The length of a window of the rigid integrators' accuracy check, in ps: it mirrors AccuracyCheck::WindowTime
+# in openmmapi/include/internal/AccuracyCheck.h (tests/python/test_benchmarks.py compares them).
+CHECK_WINDOW_PS = 2.0
 
 
 def medianRange(samples, scale=1.0):

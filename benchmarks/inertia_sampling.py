@@ -37,10 +37,9 @@ lags of 1 and 5 ps, / 6), the rotational correlation time tau_1 of the molecular
 time tau_U of U (samples 0.1 ps apart; Sokal's window, c = 5). ns/day is timed at the integer step
 below the accurate step, every configuration in turn in one process (`--timing-repetitions` blocks of
 `--timing-steps` steps in each of `--timing-contexts` Contexts per configuration, medians of the
-pooled blocks). A rigid configuration's step is timed twice, with the accuracy check
-paused and in one of its episodes (which also evaluate the energy), and weighted as a long run spends
-its steps (benchmarking.checkDuty(): 10 % of them at 2 to 10 fs, 15 % at 16 fs); a fresh Context's
-first picoseconds are all episode. Effective samples per wall-hour: simulated ps per hour / (2 tau_U).
+pooled blocks); the accuracy check stays on, its default: its episodes cost within noise of a step
+without it, docs/results/accuracy_check_cost.md. Effective samples per wall-hour: simulated ps per
+hour / (2 tau_U).
 
     python benchmarks/inertia_sampling.py --quick                  # smoke check, about 5 minutes
     python benchmarks/inertia_sampling.py --systems tip3p-nvt --starts 2 --threads 2
@@ -73,9 +72,8 @@ import openmm
 from openmm import app, unit
 
 import openmmrigid
-from benchmarking import (ROOT, RESULTS as BENCHMARK_RESULTS, Progress, ResultsDocument, SampleStore, blockMean, cpuProperties, runWorkers, checkDuty, episodeTwin, header,
-                          EPISODE, nsPerDay, openLog, productionSeconds, pyplot, say, stamp, timeInterleaved,
-                          TimingFailure)
+from benchmarking import (ROOT, RESULTS as BENCHMARK_RESULTS, Progress, ResultsDocument, SampleStore, blockMean, cpuProperties, runWorkers, header,
+                          nsPerDay, openLog, pyplot, say, stamp, timeInterleaved, TimingFailure)
 from nvt_accuracy import (AMU_PER_NM3_IN_G_PER_ML, BOLTZMANN, FRICTION, SYSTEMS as NVT_SYSTEMS, TEMPERATURE, buildModel,
                           equilibrate, stockDegreesOfFreedom, withoutBarostat)
 
@@ -611,9 +609,8 @@ def accurateStep(fit, points, tolerance):
 
 
 def timing(result, models, state, configs, platform, properties, args):
-    """ns/day of each configuration at the integer step at or below its accurate step, interleaved. A
-    rigid configuration is timed as a long run spends its steps: outside the accuracy check's episodes
-    and in them, weighted by the check's duty at that step (benchmarking.productionSeconds())."""
+    """ns/day of each configuration at the integer step at or below its accurate step, interleaved; a
+    rigid configuration with its accuracy check on, its default."""
     while True:
         try:
             return timeOnce(result, models, state, configs, platform, properties, args)
@@ -622,7 +619,6 @@ def timing(result, models, state, configs, platform, properties, args):
             # user can run: it counts as a start that did not run stably (analyse()), and the timing
             # starts again with that configuration's accurate step below it.
             label, step, _ = failure.label
-            label = label.replace(EPISODE, "")
             say(f"  {label} at {step} fs: unstable while timed ({str(failure.error)[:90]}); its accurate step is now below")
             result.setdefault("timingFailures", {}).setdefault(label, []).append(step)
             analyse(result)
@@ -633,7 +629,7 @@ def timeOnce(result, models, state, configs, platform, properties, args):
     # seeds), their blocks pooled: two Contexts of one configuration, timed side by side, differ by up
     # to 4 % on this machine (the layout each one's memory and neighbour list happen to get), which one
     # Context per configuration would put into the ratios.
-    integrators, contexts, twins = {}, [], {}
+    integrators, contexts = {}, []
 
     def bind(key, integrator, config, seed):
         context = openmm.Context(models.of(config)[0], integrator, platform, properties)
@@ -652,11 +648,7 @@ def timeOnce(result, models, state, configs, platform, properties, args):
         step = int(np.floor(step))
         for copy in range(args.timing_contexts):
             seed = 5 + copy
-            integrator = makeIntegrator(config, step, seed, models.of(config)[1])
-            if config[1]:
-                twins[(label, step, copy)] = (label + EPISODE, step, copy)
-                bind(twins[(label, step, copy)], episodeTwin(integrator), config, seed)
-            bind((label, step, copy), integrator, config, seed)
+            bind((label, step, copy), makeIntegrator(config, step, seed, models.of(config)[1]), config, seed)
     wall, _ = timeInterleaved(integrators, args.timing_steps, args.timing_repetitions)
     result["timed"] = {}
     for label, config in configs.items():
@@ -665,17 +657,11 @@ def timeOnce(result, models, state, configs, platform, properties, args):
             continue
         step = keys[0][1]
         entry = result["summary"][label]
-        paused = float(np.median([t for key in keys for t in wall[key]]))
-        timed = dict(step=step, msPerStep=1000*paused, contexts=len(keys), blocks=len(keys)*args.timing_repetitions)
-        if config[1]:
-            episode = float(np.median([t for key in keys for t in wall[twins[key]]]))
-            timed.update(msPerStep=1000*productionSeconds(paused, episode, step), msPaused=1000*paused, msEpisode=1000*episode,
-                         checkDuty=checkDuty(step))
+        seconds = float(np.median([t for key in keys for t in wall[key]]))
+        timed = dict(step=step, msPerStep=1000*seconds, contexts=len(keys), blocks=len(keys)*args.timing_repetitions)
         entry.update(timedStep=step, msPerStep=timed["msPerStep"], nsPerDay=nsPerDay(step, timed["msPerStep"]/1000))
         result["timed"][label] = timed
-        say(f"  {label} at {step} fs: {entry['msPerStep']:.2f} ms/step, {entry['nsPerDay']:.1f} ns/day"
-            + (f" (check paused {timed['msPaused']:.2f}, in an episode {timed['msEpisode']:.2f} ms, "
-               f"{100*timed['checkDuty']:.0f} % of the steps)" if "msPaused" in timed else ""))
+        say(f"  {label} at {step} fs: {entry['msPerStep']:.2f} ms/step, {entry['nsPerDay']:.1f} ns/day")
 
 
 def perWallHour(entry):
@@ -763,14 +749,26 @@ def report(results, quick):
             document.text("Unstable while timed (a fresh start, a few hundred steps), so not counted as stable from every "
                           "start: " + "; ".join(f"{label} at {', '.join(f'{s:g}' for s in steps)} fs"
                                                 for label, steps in result["timingFailures"].items()) + ".")
+        # A timing kept in a store from before the accuracy check read samples has a rigid configuration's
+        # ms/step weighted from two: a step with the check off, and one of a twin that measured the shadow
+        # work at every step, standing in for a step in the check's episodes (which then evaluated the
+        # energy); a new timing (--retime) times the check as users run it.
         split = {label: t for label, t in result.get("timed", {}).items() if "msPaused" in t}
+        notes = []
         if split:
-            document.text("ms/step of a rigid configuration is that of a long run with the accuracy check on (its default): "
-                          "the cost of a step outside the check's episodes and of one in them, weighted by the share of "
-                          "steps the check measures (benchmarking.checkDuty()); "
-                          + "; ".join(f"{label} {t['msPaused']:.2f} and {t['msEpisode']:.2f} ms, {100*t['checkDuty']:.0f} %"
-                                      for label, t in split.items())
-                          + (". Timed again: " + "; ".join(result["retimed"]) if result.get("retimed") else "") + ".")
+            notes.append("ms/step of a rigid configuration was timed before the accuracy check read samples, as a long "
+                         "run with the check on: the cost of a step with the check off and of one in its episodes (then "
+                         "an energy evaluation every step, timed by a twin measuring the shadow work at every step), "
+                         "weighted by the share of steps the check measured; "
+                         + "; ".join(f"{label} {t['msPaused']:.2f} and {t['msEpisode']:.2f} ms, {100*t['checkDuty']:.0f} %"
+                                     for label, t in split.items()))
+        elif result.get("timed"):
+            notes.append("ms/step of a rigid configuration with the accuracy check on, its default: its episodes cost "
+                         "within noise of a step without it (docs/results/accuracy_check_cost.md)")
+        if result.get("retimed"):
+            notes.append("Timed again: " + "; ".join(result["retimed"]))
+        if notes:
+            document.text(". ".join(notes) + ".")
         figure = plot(result, document.figurePath(f"inertia_sampling_{result['name']}.png"))
         if figure:
             document.figure(figure, f"{result['title']}: bias of U against step, and ns/day at the accurate step")

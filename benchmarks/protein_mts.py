@@ -21,8 +21,8 @@ Each run starts from one equilibrated state (stock 2 fs, kept in benchmarks/resu
 velocities, discards ``--equilibrate`` ps and samples every 0.1 ps for ``--time`` ps. A configuration
 stops at its first step that fails. The biases are against the reference's mean, +- the combined
 standard errors of block averages (5 blocks). Speed: every configuration that ran, timed side by side
-in one process (blocks interleaved, median of ``--repetitions``), the rigid ones with their accuracy
-check's episodes counted at the share a long run spends in them.
+in one process (blocks interleaved, median of ``--repetitions``); the accuracy check stays on, its
+default: its episodes cost within noise of a step without it, docs/results/accuracy_check_cost.md.
 
     python benchmarks/protein_mts.py                 # about 30 minutes on 2 cores
     python benchmarks/protein_mts.py --quick         # smoke run: 0.5 ps, two configurations
@@ -39,8 +39,8 @@ import openmm.app as app
 import openmm.unit as unit
 
 import openmmrigid
-from benchmarking import (RESULTS, EPISODE, blockMean, blockSteps, episodeTwin, medianRange, nsPerDay, openRun,
-                          productionSeconds, pyplot, say, saveFigure, stamp, timeInterleaved, writeCsv)
+from benchmarking import (RESULTS, blockMean, blockSteps, nsPerDay, openRun, pyplot, say, saveFigure, stamp, timeInterleaved,
+                          writeCsv)
 
 TEMPERATURE, FRICTION = 300.0, 1.0
 BONDED = (openmm.HarmonicBondForce, openmm.HarmonicAngleForce, openmm.PeriodicTorsionForce, openmm.CMAPTorsionForce)
@@ -204,29 +204,18 @@ def main():
             table.append([config.label, f"{stepFs:g}", f"{uBias:+.0f} +- {uBiasError:.0f}", f"{bBias:+.1f} +- {bBiasError:.1f}",
                           f"{t:.1f}", ""])
             say(" | ".join(table[-1]))
-            timed[f"{config.label}, {stepFs:g} fs"] = (stepFs, context, integrator, not config.stock)
+            timed[f"{config.label}, {stepFs:g} fs"] = (stepFs, context, integrator)
     document.section("Accuracy", f"{args.time:g} ps sampled per run after {args.equilibrate:g} ps; U bias against stock "
                      f"LangevinMiddle at 2 fs (mean U {reference[0][0]:.0f} kJ/mol); floor {args.floor:g} amu nm^2.")
     document.table(["configuration", "step (fs)", "U bias (kJ/mol)", "bonded U bias (kJ/mol)", "T (K)", "failed"], table)
 
     stamp("timing, interleaved")
-    integrators, twins = {}, {}
-    for label, (stepFs, context, integrator, rigid) in timed.items():
-        integrators[label] = integrator
-        if rigid:
-            twin = episodeTwin(integrator)
-            twinContext = openmm.Context(context.getSystem(), twin, platform, properties)
-            twinContext.setState(context.getState(getPositions=True, getVelocities=True))
-            twins[label] = (twin, twinContext)
-            integrators[label + EPISODE] = twin
+    integrators = {label: integrator for label, (_, _, integrator) in timed.items()}
     steps = {label: blockSteps(integrator, None, 2.0, 10) for label, integrator in integrators.items()}
     wall, _ = timeInterleaved(integrators, min(steps.values()), args.repetitions)
     speed, base = [], None
-    for label, (stepFs, _, _, rigid) in timed.items():
-        seconds = np.median(wall[label])
-        if rigid:
-            seconds = productionSeconds(seconds, np.median(wall[label + EPISODE]), stepFs)
-        nsDay = nsPerDay(stepFs, seconds)
+    for label, (stepFs, _, _) in timed.items():
+        nsDay = nsPerDay(stepFs, np.median(wall[label]))
         if "HMR" in label:
             base = nsDay
         speed.append([label, nsDay])
