@@ -215,6 +215,19 @@ struct CommonIntegrateRigidBodyStepKernel::Impl {
         translational = values[0];
         rotational = values[1];
     }
+    /**
+     * The device's sums (rescaling) into values, if `pending` (something was summed since they were
+     * last taken): pending is cleared and restart set, so that the next sum starts again from 0 (an
+     * argument of the kernel, not a write, so nothing waits for it). False, reading nothing, if not pending.
+     */
+    bool takeSums(bool& pending, bool& restart, vector<double>& values) {
+        if (!pending)
+            return false;
+        rescaling.download(values);
+        pending = false;
+        restart = true;
+        return true;
+    }
     /** Waits for the status copied in beforeLastForces() (queued before the forces) and throws if a stage failed. */
     void checkStatus() {
         if (!statusPending)
@@ -926,30 +939,20 @@ void CommonIntegrateRigidBodyStepKernel::tallyKineticEnergy(ContextImpl& context
 }
 
 double CommonIntegrateRigidBodyStepKernel::takeTally(ContextImpl& context, double& kinetic) {
-    Impl& d = *impl;
-    kinetic = 0.0;
-    if (!d.tallyPending)
-        return 0.0;
     ContextSelector selector(cc);
     vector<double> values;
-    d.rescaling.download(values);
-    d.tallyPending = false;
-    d.restartTally = true;
+    if (!impl->takeSums(impl->tallyPending, impl->restartTally, values)) {
+        kinetic = 0.0;
+        return 0.0;
+    }
     kinetic = values[5];
     return values[4];
 }
 
 double CommonIntegrateRigidBodyStepKernel::takeThermostatWork(ContextImpl& context) {
-    Impl& d = *impl;
-    if (!d.workPending)
-        return 0.0;
     ContextSelector selector(cc);
     vector<double> values;
-    d.rescaling.download(values);
-    // The next rescaling starts the device's sum again (an argument, not a write, so nothing waits for it).
-    d.workPending = false;
-    d.restartWork = true;
-    return values[3];
+    return impl->takeSums(impl->workPending, impl->restartWork, values) ? values[3] : 0.0;
 }
 
 void CommonIntegrateRigidBodyStepKernel::computeKineticEnergies(ContextImpl& context, double& translational, double& rotational) {
