@@ -86,9 +86,8 @@ void AccuracyCheck::record(const Setting& now, double time, double shadowWork, d
     stw += t*w;
     sk += kinetic;
     skk += kinetic*kinetic;
-    lastTime = time;
     if (t >= WindowTime*(1.0 - 1e-9) && t >= MinimumSteps*now.stepSize*(1.0 - 1e-9)) {
-        closeWindow();
+        closeWindow(time);
         // The next window starts from this sample.
         started = true;
         startTime = time;
@@ -100,7 +99,7 @@ void AccuracyCheck::record(const Setting& now, double time, double shadowWork, d
     }
 }
 
-void AccuracyCheck::closeWindow() {
+void AccuracyCheck::closeWindow(double lastTime) {
     const double sxx = stt - st*st/n, sxy = stw - st*sw/n, syy = sww - sw*sw/n;
     const double kineticVariance = skk/n - (sk/n)*(sk/n), meanKinetic = sk/n;
     if (!(sxx > 0.0) || setting.dof <= 0 || !(meanKinetic > 0.0))
@@ -108,25 +107,26 @@ void AccuracyCheck::closeWindow() {
     const double slope = sxy/sxx;  // shadow work per ps
     const double residual = max(0.0, syy - slope*sxy)/n;
     const double kT = (setting.temperature > 0.0 ? BOLTZ*setting.temperature : 2.0*meanKinetic/setting.dof);
-    lastDrift = slope/(setting.dof*kT);
+    const double drift = slope/(setting.dof*kT);
+    double figure;
     bool above;
     stringstream text;
     text.precision(3);
     if (setting.friction > 0.0) {
         const double c = exp(-setting.friction*setting.stepSize);
-        lastFigure = 2.0*slope*setting.stepSize/((1.0 - c*c)*setting.dof*kT);
-        above = !(fabs(lastFigure) <= HeatingLimit);
-        text << "the integration error heats the momenta the thermostat meets " << 100.0*lastFigure << " % above the bath "
-                "(limit " << 100.0*HeatingLimit << " %; from the shadow work, " << lastDrift << " kT/ps per degree of freedom, "
+        figure = 2.0*slope*setting.stepSize/((1.0 - c*c)*setting.dof*kT);
+        above = !(fabs(figure) <= HeatingLimit);
+        text << "the integration error heats the momenta the thermostat meets " << 100.0*figure << " % above the bath "
+                "(limit " << 100.0*HeatingLimit << " %; from the shadow work, " << drift << " kT/ps per degree of freedom, "
                 "over the " << WindowTime << " ps before t = " << lastTime << " ps)";
     }
     else {
-        lastFigure = (kineticVariance > 0.0 ? sqrt(residual/kineticVariance) : 0.0);
-        above = !(fabs(lastDrift) <= DriftLimit) || (setting.rescaling && !(lastFigure <= FluctuationLimit));
-        text << "the energy error fluctuates " << lastFigure << " times as much as the kinetic energy";
+        figure = (kineticVariance > 0.0 ? sqrt(residual/kineticVariance) : 0.0);
+        above = !(fabs(drift) <= DriftLimit) || (setting.rescaling && !(figure <= FluctuationLimit));
+        text << "the energy error fluctuates " << figure << " times as much as the kinetic energy";
         if (setting.rescaling)
             text << " (limit " << FluctuationLimit << ")";
-        text << " and drifts " << lastDrift << " kT/ps per degree of freedom (limit " << DriftLimit << "), over the " <<
+        text << " and drifts " << drift << " kT/ps per degree of freedom (limit " << DriftLimit << "), over the " <<
                 WindowTime << " ps before t = " << lastTime << " ps";
     }
     windowsAbove = (above ? windowsAbove + 1 : 0);

@@ -2,7 +2,6 @@
 #define OPENMMRIGID_ACCURACYCHECK_H_
 
 #include "internal/windowsExportRigid.h"
-#include <limits>
 #include <string>
 
 namespace OpenMMRigid {
@@ -137,8 +136,8 @@ public:
     /** Tell the notifier (or std::cerr) the message; returns what the notifier returned (true for std::cerr). */
     static bool notify(const std::string& message);
 private:
-    /** Judge the window just completed. */
-    void closeWindow();
+    /** Judge the window just completed, whose last sample is at this time (ps). */
+    void closeWindow(double lastTime);
     Setting setting;
     bool started = false;
     double startTime = 0.0, startWork = 0.0;
@@ -149,7 +148,6 @@ private:
     int windowsAbove = 0, windowsInEpisode = 0;
     bool inEpisode = true;
     double nextEpisode = 0.0;
-    double lastFigure = std::numeric_limits<double>::quiet_NaN(), lastDrift = std::numeric_limits<double>::quiet_NaN(), lastTime = 0.0;
     double firedTime = 0.0;
     std::string message;
 };
