@@ -90,6 +90,33 @@ static bool pythonAccuracyNotifier(const std::string& message) {
     OpenMMRigid::AccuracyCheck::setNotifier(&pythonAccuracyNotifier);
 %}
 
+// The calls that may take long run with the GIL released, as OpenMM's own wrappers run step(), so that
+// other Python threads (a progress bar, a Jupyter kernel, a sampler's workers) run meanwhile. Nothing
+// they do touches Python objects; the accuracy check's notifier takes the GIL itself.
+%define RELEASE_GIL(method)
+%exception method {
+    PyThreadState* savedThread = PyEval_SaveThread();
+    try {
+        $action
+    }
+    catch (const std::exception& e) {
+        PyEval_RestoreThread(savedThread);
+        if (!restoreAccuracyError(e.what()))
+            raiseOpenMMException(e.what());
+        SWIG_fail;
+    }
+    catch (...) {
+        PyEval_RestoreThread(savedThread);
+        raiseOpenMMException("openmmrigid: unknown C++ exception");
+        SWIG_fail;
+    }
+    PyEval_RestoreThread(savedThread);
+}
+%enddef
+RELEASE_GIL(OpenMMRigid::RigidBodyIntegratorBase::step)
+RELEASE_GIL(OpenMMRigid::RigidBodyIntegratorBase::computeSystemTemperature)
+RELEASE_GIL(OpenMMRigid::RigidBodyLangevinIntegrator::getOnStepKineticEnergy)
+
 // Every C++ exception (OpenMM::OpenMMException and std::invalid_argument both derive from
 // std::exception) reaches Python as openmm.OpenMMException with its message.
 %exception {
@@ -126,6 +153,7 @@ RigidBodyIntegratorBase* deserializeRigidIntegrator(const std::string& xml);
 RigidBodyIntegratorBase* cloneRigidIntegrator(const RigidBodyIntegratorBase& integrator);
 RigidBodyIntegrator* asRigidBodyIntegrator(OpenMM::Integrator* integrator);
 RigidBodyLangevinIntegrator* asRigidBodyLangevinIntegrator(OpenMM::Integrator* integrator);
+RigidBodyBussiIntegrator* asRigidBodyBussiIntegrator(OpenMM::Integrator* integrator);
 } // namespace Python
 } // namespace OpenMMRigid
 

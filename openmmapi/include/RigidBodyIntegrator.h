@@ -26,11 +26,10 @@ namespace OpenMMRigid {
  * Mryglod and Folk, Comput. Phys. Commun. 146, 188 (2002) (Omelyan4). Bodies and free particles
  * follow the same sequence.
  *
- * Without more, the integrator conserves the energy. setThermostat() adds the global stochastic
- * velocity rescaling of Bussi, Donadio and Parrinello (2007) after every step, for constant
- * temperature; RigidBodyLangevinIntegrator is the Langevin alternative. The questions one may ask
- * about the bodies (kinds, moments, kinetic energies, degrees of freedom) are those of
- * RigidBodyIntegratorBase.
+ * It conserves the energy. For constant temperature, RigidBodyBussiIntegrator adds the stochastic
+ * velocity rescaling of Bussi, Donadio and Parrinello (2007) after every step, and
+ * RigidBodyLangevinIntegrator is the Langevin alternative. The settings and diagnostics shared by all
+ * three are those of RigidBodyIntegratorBase.
  *
  * The bodies are either found in the System when the Context is created (every cluster of three or
  * more particles that its constraints hold rigid: the rigid waters of TIP3P, SPC/E, TIP4P-Ew and
@@ -123,117 +122,24 @@ public:
      * @throws OpenMMException if the value is not a Splitting
      */
     void setSplitting(Splitting splitting);
-    /**
-     * Get the number of force evaluations per step that the splitting takes. The forces at the end of
-     * a step are those the next step starts with, so this is the number of drifts in a step.
-     *
-     * @return 1 for Verlet, 2 for Omelyan2, 3 for Yoshida4, 4 for Omelyan4
-     */
-    int getNumForceEvaluations() const;
-    /**
-     * Add a thermostat: after every step the velocities of all bodies (linear and angular) and free
-     * particles are scaled by one common factor, which samples the kinetic energy from the exact
-     * solution of the stochastic velocity rescaling of G. Bussi, D. Donadio and M. Parrinello, J.
-     * Chem. Phys. 126, 014101 (2007), eq. (A7), over one step, with the degrees of freedom of
-     * getNumDegreesOfFreedom(). The system then samples the canonical ensemble, and the total energy
-     * minus getThermostatWork() (Bussi's effective energy) is conserved as the total energy is without
-     * a thermostat. Replaces any thermostat set before; takes effect at the next step.
-     *
-     * The velocities it rescales, and reports, are on-step: the temperature of their total kinetic
-     * energy (computeSystemTemperature(), StateDataReporter's column) reads the bath's at any step
-     * size, by construction. How that energy divides between translation and rotation is the
-     * dynamics': for rigid water at 6 to 8 fs the on-step rotation reads cold and the translation as
-     * much warm (the README gives the measurements, benchmarks/thermostat_temperature.py makes them).
-     *
-     * @param temperature    the temperature of the heat bath, measured in Kelvin (0 damps the motion)
-     * @param collisionTime  tau, the relaxation time of the kinetic energy, measured in ps
-     * @throws OpenMMException if the temperature is negative or not finite, or the collision time not positive and finite
-     */
-    void setThermostat(double temperature, double collisionTime);
-    /** Remove the thermostat: the integrator conserves the energy again (the default). */
-    void removeThermostat() {
-        thermostat = false;
-    }
-    /** Get whether a thermostat is set. */
-    bool hasThermostat() const {
-        return thermostat;
-    }
-    /**
-     * Get the temperature of the thermostat's heat bath.
-     *
-     * @return the temperature, measured in Kelvin (0 if no thermostat was ever set)
-     */
-    double getThermostatTemperature() const {
-        return thermostatTemperature;
-    }
-    /**
-     * Get the temperature of the thermostat's heat bath, as thermostated integrators (LangevinIntegrator,
-     * RigidBodyLangevinIntegrator) name it, so that tools which look for getTemperature() and
-     * setTemperature() (openmmtools' ThermodynamicState) see the thermostat. Without a thermostat the
-     * integrator conserves the energy (NVE) and has no temperature: this is an error (in Python an
-     * openmm.OpenMMException that is also an AttributeError, which is how openmmtools recognises an
-     * integrator without a heat bath).
-     *
-     * @return the temperature, measured in Kelvin
-     * @throws OpenMMException if no thermostat is set
-     */
-    double getTemperature() const;
-    /**
-     * Set the temperature of the thermostat's heat bath, keeping its collision time. It may be changed
-     * between steps. Without a thermostat this is an error (see getTemperature()): use setThermostat()
-     * to add one.
-     *
-     * @param temperature  the temperature of the heat bath, measured in Kelvin
-     * @throws OpenMMException if no thermostat is set, or the temperature is negative or not finite
-     */
-    void setTemperature(double temperature);
-    /**
-     * Get the collision time tau of the thermostat.
-     *
-     * @return the collision time, measured in ps (0 if no thermostat was ever set)
-     */
-    double getThermostatCollisionTime() const {
-        return thermostatCollisionTime;
-    }
-    /**
-     * Get the kinetic energy the thermostat has added to the system since the Context was created
-     * (negative where it removed energy). The total energy minus this is Bussi's effective energy,
-     * conserved up to the integration error. Saved in checkpoints. Only available once the
-     * integrator is bound to a Context. On OpenCL and CUDA the work is summed on the device, and
-     * this call waits for the device to read it: call it where the value is needed, not every step.
-     *
-     * @return the energy added, measured in kJ/mol
-     */
-    double getThermostatWork();
-    /** Get the random number seed of the thermostat (0: a new one for every Context). See setRandomNumberSeed(). */
-    int getRandomNumberSeed() const {
-        return randomNumberSeed;
-    }
-    /**
-     * Set the random number seed of the thermostat, read when a Context is created. With the same
-     * seed the Reference and CPU platforms give the same trajectory, with any number of threads;
-     * different seeds give different ones.
-     *
-     * @param seed  the seed; 0 (the default) picks a new seed for every Context
-     */
-    void setRandomNumberSeed(int seed) {
-        randomNumberSeed = seed;
-    }
 protected:
+    /** For RigidBodyBussiIntegrator, which adds a thermostat: className names the concrete class in messages. */
+    RigidBodyIntegrator(const std::string& className, double stepSize);
+    RigidBodyIntegrator(const std::string& className, double stepSize, const std::vector<std::vector<int> >& bodies);
     int getRequestedSeed() const {
-        return randomNumberSeed;
+        return 0;
     }
     bool hasThermostatWork() const {
         return true;
     }
-    double getBathTemperature(const std::string& method) const;
     AccuracyCheck::Setting getAccuracySetting() const;
     void executeStep(OpenMM::ContextImpl& context);
+    /** The thermostat of each step: NULL for constant energy (RigidBodyBussiIntegrator gives its own). */
+    virtual const BussiBath* getBath() const {
+        return NULL;
+    }
 private:
     Splitting splitting;
-    bool thermostat;
-    double thermostatTemperature, thermostatCollisionTime;
-    int randomNumberSeed;
 };
 
 } // namespace OpenMMRigid

@@ -15,6 +15,10 @@
 #include <utility>
 #include <vector>
 
+namespace OpenMM {
+class SerializationNode;
+}
+
 namespace OpenMMRigid {
 
 class IntegrateRigidBodyStepKernel;
@@ -65,60 +69,18 @@ public:
      */
     void setStepSize(double size) override;
 #endif
-    /** Get whether the bodies were given explicitly (rather than found from the System's constraints). */
-    bool hasExplicitBodies() const {
-        return explicitBodies;
-    }
     /**
-     * Get the explicit bodies passed to the constructor.
-     *
-     * @return the particle indices of each body; empty when the bodies are found from the System
-     */
-    const std::vector<std::vector<int> >& getExplicitBodies() const {
-        return bodies;
-    }
-    /**
-     * Get the number of rigid bodies. Explicit bodies are counted at any time (before a Context is made,
-     * and before positions are set); bodies found from the System's constraints once the integrator
-     * is bound to a Context.
+     * Get the number of rigid bodies: explicit bodies at any time, those found from the System's
+     * constraints once the integrator is bound to a Context.
      */
     int getNumBodies() const;
     /**
-     * Get the particle indices of a rigid body. Only available once the integrator is bound to a Context.
+     * Get the particle indices of a rigid body, once the integrator is bound to a Context.
      *
      * @param index  the index of the body, from 0 to getNumBodies() - 1
      * @return the indices of the body's particles, in the order the body was given or found
      */
     std::vector<int> getBodyParticles(int index) const;
-    /**
-     * Get the kind of a rigid body. Only available once the integrator is bound to a Context; for an
-     * explicit body, once positions have been set.
-     *
-     * @param index  the index of the body, from 0 to getNumBodies() - 1
-     * @return "point" (one particle: translation only), "linear" (two rotational degrees of freedom),
-     *         "spherical", "symmetric" or "asymmetric" (by its principal moments)
-     */
-    std::string getBodyKind(int index) const;
-    /**
-     * Get the principal moments of inertia of a rigid body as the integrator moves it, in amu nm^2, in
-     * ascending order: those of its particles' masses, each nonzero one raised to
-     * getMinimumMomentOfInertia() where it is smaller (getBodyMassMoments() gives them unraised, in the
-     * same axes). Only available once the integrator is bound to a Context; for an explicit body, once
-     * positions have been set.
-     *
-     * @param index  the index of the body, from 0 to getNumBodies() - 1
-     * @return the three principal moments, measured in amu nm^2
-     */
-    std::vector<double> getBodyMoments(int index) const;
-    /**
-     * Get the principal moments of inertia of a rigid body's particle masses, in amu nm^2, in the
-     * order of getBodyMoments(): the body's moments before any is raised. Available when
-     * getBodyMoments() is.
-     *
-     * @param index  the index of the body, from 0 to getNumBodies() - 1
-     * @return the three principal moments, measured in amu nm^2
-     */
-    std::vector<double> getBodyMassMoments(int index) const;
     /**
      * Get the smallest principal moment of inertia a body moves with (0, the default: every body moves
      * with the moments of its particles' masses).
@@ -200,139 +162,60 @@ public:
      */
     static constexpr double MaximumMinimumMoment = 100.0;
     /**
-     * Get the kinetic energy of the translation of the bodies' centres of mass plus that of the free
-     * particles. Only available once the integrator is bound to a Context.
-     *
-     * @return the kinetic energy, measured in kJ/mol
-     */
-    double getTranslationalKineticEnergy();
-    /**
-     * Get the kinetic energy of the rotation of the bodies about their centres of mass. Only available
-     * once the integrator is bound to a Context.
-     *
-     * @return the kinetic energy, measured in kJ/mol
-     */
-    double getRotationalKineticEnergy();
-    /**
-     * Get the number of degrees of freedom of the system as this integrator moves it: 3 per free
-     * particle, less one per constraint among free particles, plus 3 translational and 0 (point),
-     * 2 (linear) or 3 rotational ones per body, less 3 if the System has a CMMotionRemover. With it,
-     * the temperature is 2 KE / (dof k_B). Only available once the integrator is bound to a Context;
-     * with explicit bodies, once positions have been set (a body's shape decides whether it is linear).
-     */
-    int getNumDegreesOfFreedom() const;
-    /**
-     * Get the instantaneous temperature of the system, 2 KE / (dof k_B) with dof from
-     * getNumDegreesOfFreedom() (0 if there are no degrees of freedom). openmm.app.StateDataReporter
-     * uses this method when an integrator has it, so its temperature is right for explicit bodies
-     * too. Available when getNumDegreesOfFreedom() is.
+     * Get the instantaneous temperature, 2 KE / (dof k_B), with the degrees of freedom as this integrator
+     * moves the system: 3 per free particle, less one per constraint among free particles, plus 3
+     * translational and 0 (one particle), 2 (linear) or 3 rotational ones per body, less 3 with a
+     * CMMotionRemover. openmm.app.StateDataReporter uses it. Available once the integrator is bound to
+     * a Context and, with explicit bodies, the positions are set.
      *
      * @return the temperature, measured in K
      */
     double computeSystemTemperature();
     /**
-     * Set whether to measure the shadow work: the energy change of the deterministic stages of each
-     * step (kicks and drifts), summed over the steps (see getShadowWork()). Off by default: it needs
-     * the potential energy at one force evaluation per step and two kinetic energies (three for
-     * RigidBodyLangevinIntegrator), which the step otherwise does not compute. Takes effect at the
-     * next step; switching it on or off keeps the sum so far.
+     * Set whether to measure the shadow work and the heat of the steps (getShadowWork(), getHeat()). Off
+     * by default: it costs an energy evaluation per step. Takes effect at the next step; the sums so far
+     * are kept.
      *
-     * @param measure  true to measure it
+     * @param measure  true to measure them
      */
-    void setMeasureShadowWork(bool measure) {
-        measureShadowWork = measure;
-    }
-    /** Get whether the shadow work is measured (see setMeasureShadowWork()). */
+    void setMeasureShadowWork(bool measure);
+    /** Get whether the shadow work and the heat are measured (see setMeasureShadowWork()). */
     bool getMeasureShadowWork() const {
         return measureShadowWork;
     }
     /**
-     * Set whether to measure the heat: the kinetic energy that the stochastic part of each step (the
-     * Ornstein-Uhlenbeck stage of RigidBodyLangevinIntegrator, the rescaling of RigidBodyIntegrator's
-     * thermostat) adds, summed over the steps (see getHeat()). Off by default; it costs a sum per
-     * step for RigidBodyLangevinIntegrator (which stays on a GPU) and nothing for RigidBodyIntegrator's
-     * thermostat (the heat is its work, summed with it). Takes effect at the next step.
-     *
-     * @param measure  true to measure it
-     */
-    void setMeasureHeat(bool measure);
-    /** Get whether the heat is measured (see setMeasureHeat()). */
-    bool getMeasureHeat() const {
-        return measureHeat;
-    }
-    /**
-     * Get the shadow work: the sum, over the steps taken while it was measured since the Context was
-     * created or resetShadowWork() was called, of the change of the total energy K + U (U of the
-     * integration force groups) that the step's deterministic stages made. A free drift changes the
-     * potential energy only (the exact free rotation keeps each body's kinetic energy; NoSquish and the
-     * constraints among free particles may change it a little, which is counted), and a kick the
-     * kinetic energy only. With the heat, it makes up the whole energy change of the steps:
-     * shadow work + heat = change of K + U, which is how it is computed (the energy before and after
-     * each step, less the heat). What changes the state between steps (a barostat, a
-     * CMMotionRemover, setPositions) is neither; but velocities that a Force changes between steps
-     * into something other than rigid motion (an AndersenThermostat's redraws) are projected onto it
-     * by the next step, and the energy that removes counts in that step's shadow work. For a trajectory of an exact dynamics it would be 0;
-     * its growth per step measures the integrator's error (Sivak, Chodera and Crooks, Phys. Rev. X 3,
-     * 011007 (2013)). Which terms each splitting accumulates: the README, "Shadow work and heat".
-     * Saved in checkpoints. Only available once the integrator is bound to a Context.
+     * Get the shadow work: the change of the total energy K + U (U of the integration force groups)
+     * made by the deterministic stages (kicks and drifts) of the steps measured since the Context was
+     * made, so that shadow work + heat = the change of K + U over those steps. Exact dynamics would give
+     * 0; its growth measures the integration error (Sivak, Chodera and Crooks, Phys. Rev. X 3, 011007
+     * (2013)). What changes the state between steps (a barostat, a CMMotionRemover, setPositions) is not
+     * counted. Saved in checkpoints.
      *
      * @return the shadow work, measured in kJ/mol
-     * @throws OpenMMException if the shadow work is not measured (setMeasureShadowWork())
+     * @throws OpenMMException if the integrator is not bound to a Context, or the shadow work is not measured
      */
     double getShadowWork() const;
     /**
-     * Get the heat: the sum, over the steps taken while it was measured since the Context was created
-     * or resetHeat() was called, of the kinetic energy the stochastic part of the step added (negative
-     * where it took energy away). For RigidBodyIntegrator it is the thermostat's work over those steps
-     * (0 without a thermostat). Saved in checkpoints. Only available once the integrator is bound to a
-     * Context.
+     * Get the heat: the kinetic energy that the stochastic stages (RigidBodyLangevinIntegrator's
+     * Ornstein-Uhlenbeck stage, RigidBodyBussiIntegrator's rescaling) added over the steps measured since
+     * the Context was made; negative where they took energy away. Saved in checkpoints.
      *
      * @return the heat, measured in kJ/mol
-     * @throws OpenMMException if the heat is not measured (setMeasureHeat())
+     * @throws OpenMMException if the integrator is not bound to a Context, or the heat is not measured
      */
     double getHeat() const;
     /**
-     * Get the shadow work (getShadowWork()) in units of k_B T, T the temperature of the heat bath now.
+     * Set whether to check, from the run itself, that the step is small enough for the ensemble to be
+     * right (on by default). The check reads the energy balance of the steps at samples, in 2 ps windows
+     * within episodes of 4 ps every 40 ps, and costs no measurable time. When the run leaves its accurate
+     * range (a Langevin run's momenta heated more than 4 % above the bath, a constant-energy run drifting
+     * more than 0.01 kT/ps per degree of freedom, a Bussi run's energy error fluctuating more than 0.06
+     * times the kinetic energy; in two windows in a row) it says so once, from within the step, naming the
+     * step size, the figure and the remedies: in Python as an openmmrigid.AccuracyWarning, in C++ on the
+     * standard error stream. The run goes on. A System with an AndersenThermostat is not checked. The
+     * README ("The accuracy check") gives the limits and the measurements behind them.
      *
-     * @return the shadow work divided by k_B T (dimensionless)
-     * @throws OpenMMException if the shadow work is not measured, or the integrator has no heat bath
-     *         (a RigidBodyIntegrator without a thermostat), or its temperature is 0
-     */
-    double getShadowWorkInKT() const;
-    /**
-     * Get the heat (getHeat()) in units of k_B T, T the temperature of the heat bath now.
-     *
-     * @return the heat divided by k_B T (dimensionless)
-     * @throws OpenMMException if the heat is not measured, or the integrator has no heat bath (a
-     *         RigidBodyIntegrator without a thermostat), or its temperature is 0
-     */
-    double getHeatInKT() const;
-    /** Set the shadow work back to 0 (see getShadowWork()). Only available once the integrator is bound to a Context. */
-    void resetShadowWork();
-    /** Set the heat back to 0 (see getHeat()). Only available once the integrator is bound to a Context. */
-    void resetHeat();
-    /**
-     * Set whether to check, from the run itself, that the run stays in the integrator's accurate range
-     * (on by default). The check reads the shadow work of the steps in episodes of at least 4 ps, one
-     * at the start and one every 40 ps (while it reads, it evaluates the energy at 40 samples per 2 ps
-     * window, and an ordinary step costs two kinetic-energy sums, which stay on a GPU), and, when the step is too large for the ensemble to be right (the
-     * integration error heats a Langevin run's momenta more than 4 % above the bath, the energy of a
-     * run without friction drifts more than 0.01 kT/ps per degree of freedom, or, with the Bussi
-     * thermostat, the energy error fluctuates more than 0.06 times the kinetic energy, in two 2 ps
-     * windows in a row), it records a message
-     * that names the step size, the figure and the remedies (getAccuracyWarning()), and says it once,
-     * from within the step, however the step was taken (directly, through a CompoundIntegrator or
-     * app.Simulation): in Python as an openmmrigid.AccuracyWarning (a RuntimeWarning) pointing at the
-     * line that stepped, in C++ on the standard error stream. It does not stop the run, unless Python's warning
-     * filters make the warning an error. Loading a checkpoint, or a State from before the check fired,
-     * starts the check again. A System with an AndersenThermostat is not checked (its redraws between
-     * steps are not rigid motion, and their projection would read as an energy drift). Not seen by the
-     * check: the configurational bias of the Verlet splitting with the Bussi thermostat and raised
-     * moments of inertia (rigid water at 8 fs), whose energy error fluctuates too little to judge it;
-     * use Omelyan2 or RigidBodyLangevinIntegrator there. The README ("The accuracy check") gives the
-     * limits and the measurements behind them.
-     *
-     * @param check  true to check (the default), false to take no measurement for it
+     * @param check  true to check (the default)
      */
     void setAccuracyCheck(bool check) {
         accuracyCheck = check;
@@ -341,13 +224,6 @@ public:
     bool getAccuracyCheck() const {
         return accuracyCheck;
     }
-    /**
-     * Get the message of the accuracy check (setAccuracyCheck()) if it has found this Context's run out
-     * of its accurate range: the step size, the figure and its limit, the time, and the remedies.
-     *
-     * @return the message, or an empty string if the check has not fired
-     */
-    std::string getAccuracyWarning() const;
 #ifndef SWIG
     /**
      * Whether the step being taken ends with the potential energy evaluated (StepState::potentialEnergy):
@@ -358,7 +234,7 @@ public:
     }
     /** Whether the step being taken sums the heat of its stochastic stages: for getHeat(), getShadowWork(), or the accuracy check. */
     bool wantsHeat() const {
-        return measureHeat || measureShadowWork || checkingStep;
+        return measureShadowWork || checkingStep;
     }
 #endif
     /**
@@ -367,11 +243,11 @@ public:
      * @param steps   the number of time steps to take
      */
     void step(int steps);
-    /** Get the name of the class the user made, "RigidBodyIntegrator" or "RigidBodyLangevinIntegrator", which messages name. */
+protected:
+    /** The name of the class the user made, which messages name. */
     const std::string& getClassName() const {
         return className;
     }
-protected:
     /**
      * @param className  the name of the concrete class, for messages
      * @param stepSize   the step size, measured in ps
@@ -422,11 +298,6 @@ protected:
     virtual double getLoadedVelocityKick(int version) const {
         return 0.0;
     }
-    /**
-     * The temperature of the heat bath, in K, for getShadowWorkInKT() and getHeatInKT(); an
-     * OpenMMException, naming the method, if the integrator has none.
-     */
-    virtual double getBathTemperature(const std::string& method) const = 0;
     /** What the accuracy check needs to know about a step of this integrator (see internal/AccuracyCheck.h). */
     virtual AccuracyCheck::Setting getAccuracySetting() const = 0;
     /** Whether the step state's thermostat work belongs to this integrator's checkpoints. */
@@ -463,6 +334,18 @@ protected:
      */
     mutable StepState stepState;
 private:
+    // The XML proxies write the explicit bodies (serialization/src/RigidIntegratorSerialization.cpp).
+    friend void serializeRigidIntegratorBase(const RigidBodyIntegratorBase& integrator, OpenMM::SerializationNode& node);
+    /** Whether the bodies were given explicitly, rather than found from the System's constraints. */
+    bool hasExplicitBodies() const {
+        return explicitBodies;
+    }
+    /** The explicit bodies passed to the constructor (empty when they are found from the System). */
+    const std::vector<std::vector<int> >& getExplicitBodies() const {
+        return bodies;
+    }
+    /** The degrees of freedom of computeSystemTemperature(). */
+    int getNumDegreesOfFreedom() const;
     /** Body b, with its shape (an OpenMMException if it is an explicit body whose positions were never set). */
     const RigidBodySystem& getShapedBody(int b) const;
     /**

@@ -141,15 +141,6 @@ public:
         randomNumberSeed = seed;
     }
     /**
-     * Get the time by which the velocities the Context holds lag behind the positions: half a step,
-     * as for LangevinMiddleIntegrator (see the class description).
-     *
-     * @return half the step size, measured in ps
-     */
-    double getVelocityTimeOffset() const {
-        return 0.5*getStepSize();
-    }
-    /**
      * Get the kinetic energy of the on-step velocities: the momenta the Context holds (half a step
      * behind the positions) kicked by half a step of the forces at the positions now, each body's
      * momentum by its force and its angular momentum by its torque (in its own, possibly raised,
@@ -172,13 +163,14 @@ public:
         return computeKickedKineticEnergy(getVelocityTimeOffset(), "getOnStepKineticEnergy");
     }
 protected:
+    /** The velocities the Context holds lag behind the positions by half a step, as LangevinMiddleIntegrator's. */
+    double getVelocityTimeOffset() const {
+        return 0.5*getStepSize();
+    }
     int getRequestedSeed() const {
         return randomNumberSeed;
     }
     void executeStep(OpenMM::ContextImpl& context);
-    double getBathTemperature(const std::string& method) const {
-        return temperature;
-    }
     AccuracyCheck::Setting getAccuracySetting() const;
     /** A checkpoint from before version 2 holds on-step velocities: they go half a kick back. */
     double getLoadedVelocityKick(int version) const {

@@ -113,13 +113,13 @@ void checkAndersenThermostat(const System& system, const vector<vector<int> >& b
 } // namespace
 
 RigidBodyIntegratorBase::RigidBodyIntegratorBase(const string& className, double stepSize) : className(className),
-        explicitBodies(false), rotationMethod(Exact), minimumMoment(0.0), measureShadowWork(false), measureHeat(false), accuracyCheck(true), checkingStep(false), energyWanted(false), andersenThermostat(false), checkedLedger(0.0), stateUpdates(0), bound(false), forcesAreValid(false), needsProjection(true), restoredCheckpoint(false), loadedVelocityKick(0.0) {
+        explicitBodies(false), rotationMethod(Exact), minimumMoment(0.0), measureShadowWork(false), accuracyCheck(true), checkingStep(false), energyWanted(false), andersenThermostat(false), checkedLedger(0.0), stateUpdates(0), bound(false), forcesAreValid(false), needsProjection(true), restoredCheckpoint(false), loadedVelocityKick(0.0) {
     setStepSize(stepSize);
     setConstraintTolerance(1e-5);
 }
 
 RigidBodyIntegratorBase::RigidBodyIntegratorBase(const string& className, double stepSize, const vector<vector<int> >& bodies) :
-        className(className), bodies(bodies), explicitBodies(true), rotationMethod(Exact), minimumMoment(0.0), measureShadowWork(false), measureHeat(false), accuracyCheck(true), checkingStep(false), energyWanted(false), andersenThermostat(false), checkedLedger(0.0), stateUpdates(0), bound(false),
+        className(className), bodies(bodies), explicitBodies(true), rotationMethod(Exact), minimumMoment(0.0), measureShadowWork(false), accuracyCheck(true), checkingStep(false), energyWanted(false), andersenThermostat(false), checkedLedger(0.0), stateUpdates(0), bound(false),
         forcesAreValid(false), needsProjection(true), restoredCheckpoint(false), loadedVelocityKick(0.0) {
     setStepSize(stepSize);
     setConstraintTolerance(1e-5);
@@ -223,20 +223,6 @@ const RigidBodySystem& RigidBodyIntegratorBase::getShapedBody(int index) const {
     return all;
 }
 
-string RigidBodyIntegratorBase::getBodyKind(int index) const {
-    return rigidBodyKindName(getShapedBody(index).getKind(index));
-}
-
-vector<double> RigidBodyIntegratorBase::getBodyMoments(int index) const {
-    const double* moments = getShapedBody(index).getMoments(index);
-    return vector<double>(moments, moments + 3);
-}
-
-vector<double> RigidBodyIntegratorBase::getBodyMassMoments(int index) const {
-    const double* moments = getShapedBody(index).getMassMoments(index);
-    return vector<double>(moments, moments + 3);
-}
-
 vector<Vec3> RigidBodyIntegratorBase::getVelocitiesForTemperature(const System& system, double temperature, int randomSeed) const {
     vector<Vec3> velocities = Integrator::getVelocitiesForTemperature(system, temperature, randomSeed);
     if (!bound || !topology->hasRaisedMoments())
@@ -319,18 +305,6 @@ double RigidBodyIntegratorBase::computeSystemTemperature() {
     return 2.0*computeKineticEnergy()/(dof*BOLTZ);
 }
 
-double RigidBodyIntegratorBase::getTranslationalKineticEnergy() {
-    double translational, rotational;
-    getKernel().computeKineticEnergies(*context, translational, rotational);
-    return translational;
-}
-
-double RigidBodyIntegratorBase::getRotationalKineticEnergy() {
-    double translational, rotational;
-    getKernel().computeKineticEnergies(*context, translational, rotational);
-    return rotational;
-}
-
 double RigidBodyIntegratorBase::getShadowWork() const {
     getKernel();  // throws unless bound
     if (!measureShadowWork)
@@ -339,56 +313,19 @@ double RigidBodyIntegratorBase::getShadowWork() const {
     return stepState.shadowWork;
 }
 
-void RigidBodyIntegratorBase::setMeasureHeat(bool measure) {
+void RigidBodyIntegratorBase::setMeasureShadowWork(bool measure) {
     // The work the kernel holds is heat or not as the steps that did it measured it.
-    if (bound && measure != measureHeat)
+    if (bound && measure != measureShadowWork)
         takeThermostatWork();
-    measureHeat = measure;
+    measureShadowWork = measure;
 }
 
 double RigidBodyIntegratorBase::getHeat() const {
     getKernel();  // throws unless bound
-    if (!measureHeat)
-        throw OpenMMException(className + ".getHeat: the heat is not measured; call setMeasureHeat(True) before the steps");
+    if (!measureShadowWork)
+        throw OpenMMException(className + ".getHeat: the heat is not measured; call setMeasureShadowWork(True) before the steps");
     takeThermostatWork();
     return stepState.heat;
-}
-
-namespace {
-
-/** k_B T of the bath, for the getters in kT (an OpenMMException if it is 0). */
-double thermalEnergy(double temperature, const string& className, const string& method) {
-    if (!(temperature > 0.0))
-        throw OpenMMException(className + "." + method + ": the heat bath's temperature is 0, so there is no k_B T to measure "
-                "energy in; use the getter in kJ/mol");
-    return BOLTZ*temperature;
-}
-
-} // namespace
-
-double RigidBodyIntegratorBase::getShadowWorkInKT() const {
-    double work = getShadowWork();
-    return work/thermalEnergy(getBathTemperature("getShadowWorkInKT"), className, "getShadowWorkInKT");
-}
-
-double RigidBodyIntegratorBase::getHeatInKT() const {
-    double heat = getHeat();
-    return heat/thermalEnergy(getBathTemperature("getHeatInKT"), className, "getHeatInKT");
-}
-
-string RigidBodyIntegratorBase::getAccuracyWarning() const {
-    return accuracyMonitor.getMessage();
-}
-
-void RigidBodyIntegratorBase::resetShadowWork() {
-    getKernel();  // throws unless bound
-    stepState.shadowWork = 0.0;
-}
-
-void RigidBodyIntegratorBase::resetHeat() {
-    getKernel();  // throws unless bound
-    takeThermostatWork();
-    stepState.heat = 0.0;
 }
 
 void RigidBodyIntegratorBase::initialize(ContextImpl& contextRef) {
@@ -592,9 +529,13 @@ void RigidBodyIntegratorBase::loadCheckpoint(istream& stream) {
         if (version > checkpointVersion)
             throw OpenMMException(className + ": the checkpoint has version " + to_string(version) + " of this plugin's "
                     "format, newer than this build reads (" + to_string(checkpointVersion) + "); update openmm-rigid");
-        if (writer != className)
-            throw OpenMMException(className + ": the checkpoint was written by a " + writer + ", not a " + className +
-                    "; load it into a Context whose integrator is a " + writer);
+        // RigidBodyIntegrator and RigidBodyBussiIntegrator write the same state (a RigidBodyIntegrator
+        // with a thermostat wrote the checkpoints of RigidBodyBussiIntegrator before it was a class).
+        const auto format = [](const string& name) {
+            return (name == "RigidBodyBussiIntegrator" ? string("RigidBodyIntegrator") : name);
+        };
+        if (format(writer) != format(className))
+            throw OpenMMException(className + ": the checkpoint was written by a " + writer + "; load it with that integrator");
     }
     else {
         stream.clear();
@@ -728,7 +669,7 @@ void RigidBodyIntegratorBase::takeThermostatWork() const {
     if (!bound)
         return;
     // The heat is the thermostat's work over the steps that measured it.
-    OpenMMRigid::takeThermostatWork(*context, getKernel(), stepState, measureHeat);
+    OpenMMRigid::takeThermostatWork(*context, getKernel(), stepState, measureShadowWork);
 }
 
 bool RigidBodyIntegratorBase::barostatMayMove(long long call) const {

@@ -173,13 +173,13 @@ StepGeometry currentGeometry(ContextImpl& context, const RigidBodySystem& bodies
 }
 
 void stepRigidBodyIntegrator(ContextImpl& context, IntegrateRigidBodyStepKernel& kernel, const RigidBodyIntegrator& integrator,
-                             const RigidBodySystem& bodies, StepState& state) {
+                             const BussiBath* bath, const RigidBodySystem& bodies, StepState& state) {
     const SplittingScheme& scheme = splittingScheme(integrator.getSplitting());
     const double dt = integrator.getStepSize(), tolerance = integrator.getConstraintTolerance();
     const RigidBodyOptions::RotationMethod method = integrator.getRotationMethod();
     const bool measureShadowWork = integrator.getMeasureShadowWork(), energy = integrator.wantsEnergy();
     kernel.beginStep(context, currentGeometry(context, bodies));
-    const double startEnergy = startingEnergy(context, kernel, state, measureShadowWork, integrator.getClassName());
+    const double startEnergy = startingEnergy(context, kernel, state, measureShadowWork, bodies.getClassName());
     // kick(a_0 dt) drift(b_0 dt) ... drift(b_{s-1} dt) kick(a_s dt): the first kick uses the forces
     // the Context holds, and every drift is followed by a force evaluation. Only the last one needs
     // the energy for the shadow work: the kicks and drifts in between telescope.
@@ -211,7 +211,7 @@ void stepRigidBodyIntegrator(ContextImpl& context, IntegrateRigidBodyStepKernel&
         kernel.closingKick(context, scheme.kicks[scheme.numDrifts]*dt, tolerance, 0);
     }
     double kinetic = 0.0;
-    if (integrator.hasThermostat()) {
+    if (bath != NULL) {
         // Bussi, Donadio and Parrinello, J. Chem. Phys. 126, 014101 (2007), eq. (A7): one global
         // factor for every momentum, from the exact solution over this step of the stochastic
         // equation for the kinetic energy. Its deviates do not depend on the kinetic energy: drawn
@@ -219,11 +219,11 @@ void stepRigidBodyIntegrator(ContextImpl& context, IntegrateRigidBodyStepKernel&
         // are (on a GPU without the host reading anything) and accumulates the work K' - K, which
         // is also the heat (RigidBodyIntegratorBase::takeThermostatWork()).
         const int dof = bodies.getNumDegreesOfFreedom();
-        const double c = exp(-dt/integrator.getThermostatCollisionTime());
+        const double c = exp(-dt/bath->collisionTime);
         NormalStream random(state.seed, 0, state.randomCounter++);
         double r1, rest;
         stochasticRescalingDeviates(dof, c, random, r1, rest);
-        kernel.rescaleMomenta(context, 0.5*dof*BOLTZ*integrator.getThermostatTemperature(), dof, c, r1, rest);
+        kernel.rescaleMomenta(context, 0.5*dof*BOLTZ*bath->temperature, dof, c, r1, rest);
         if (measureShadowWork) {
             // A step that reads energies anyway: the kinetic energy before the rescaling.
             double newKinetic;
@@ -246,7 +246,7 @@ void stepRigidBodyLangevinIntegrator(ContextImpl& context, IntegrateRigidBodySte
     const RigidBodyOptions::RotationMethod method = integrator.getRotationMethod();
     const bool measureShadowWork = integrator.getMeasureShadowWork(), energy = integrator.wantsEnergy();
     kernel.beginStep(context, currentGeometry(context, bodies));
-    const double startEnergy = startingEnergy(context, kernel, state, measureShadowWork, integrator.getClassName());
+    const double startEnergy = startingEnergy(context, kernel, state, measureShadowWork, bodies.getClassName());
     // LFMiddle (Z. Zhang, X. Liu, K. Yan, M. E. Tuckerman and J. Liu, J. Phys. Chem. A 123, 6056
     // (2019)), as LangevinMiddleIntegrator: B(dt) A(dt/2) O A(dt/2), force. It is BAOAB (Leimkuhler
     // and Matthews, Appl. Math. Res. Express 2013, 34) with the closing half kick of one step joined
@@ -290,7 +290,7 @@ void stepRigidBodyLangevinIntegrator(ContextImpl& context, IntegrateRigidBodySte
     // No kick: the rigid velocities written to the body particles, the constraints among free particles applied to velocities.
     kernel.closingKick(context, 0.0, tolerance, -1);
     if (measureShadowWork) {
-        const double heat = takeThermostatWork(context, kernel, state, integrator.getMeasureHeat());
+        const double heat = takeThermostatWork(context, kernel, state, true);
         state.shadowWork += kineticEnergy(context, kernel) + potential - startEnergy - heat;
     }
     state.potentialEnergy = potential;

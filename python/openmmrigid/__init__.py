@@ -10,52 +10,61 @@ openmm first or not: openmmrigid imports it).
 Contents
 --------
 RigidBodyIntegrator
-    The integrator, an ``openmm.Integrator`` for ``openmm.Context`` and ``openmm.app.Simulation``.
+    Constant energy: kicks by forces and torques, exact free drifts (splittings Verlet, Omelyan2, ...).
+RigidBodyBussiIntegrator
+    The same with the stochastic velocity rescaling thermostat of Bussi, Donadio and Parrinello.
 RigidBodyLangevinIntegrator
-    The same for constant temperature: a Langevin integrator (LangevinMiddleIntegrator's arrangement, BAOAB with half-step velocities) with the exact free drift.
+    Constant temperature by Langevin dynamics (LangevinMiddleIntegrator's arrangement) with exact drifts.
 RigidBodyIntegratorBase
-    Their common base (bodies, rotation method, kinetic energies, degrees of freedom).
+    Their common base: raised moments of inertia, multiple time steps, shadow work and heat, the
+    accuracy check.
+AccuracyWarning
+    What a step says, once, when the run leaves the integrator's accurate range.
+rigidBodiesFromTopology, rigidHydrogenGroups, removeIntraBodyInteractions
+    Bodies from an ``openmm.app.Topology`` or a System's constraint clusters, and a System without the
+    interactions inside each body.
 RigidStateDataReporter
-    An ``openmm.app.StateDataReporter`` that takes its degrees of freedom from the integrator, with
-    columns for the translational and rotational kinetic energies and temperatures.
-rigidBodiesFromTopology
-    The bodies (lists of particle indices) of the selected residues of an ``openmm.app.Topology``.
-rigidHydrogenGroups
-    The bodies of a System's constraint clusters (X-H groups, waters) and, optionally, its planar groups
-    (aromatic rings, amides, peptide groups): a model with rigid X-H groups.
-removeIntraBodyInteractions
-    A copy of a System without the bonded terms, nonbonded pairs and constraints inside each body.
-getSupportedPlatforms
-    The platforms that have the integrators' kernels here (Reference, CPU, and OpenCL and CUDA where
-    their plugins are installed); pluginLoadFailures says why a GPU plugin present did not load.
-NoThermostatError
-    What ``RigidBodyIntegrator.getTemperature()`` raises without a thermostat (an ``openmm.OpenMMException``
-    and an ``AttributeError``, so that openmmtools sees an NVE integrator).
-deserializeIntegrator
-    A RigidBodyIntegrator or RigidBodyLangevinIntegrator from XML (``openmm.XmlSerializer.deserialize`` does the same).
-FreeRotor
-    The exact torque-free motion of a single rigid body.
-testing
-    Small systems and measurements shared by the examples and benchmarks (``testing.alanineDipeptide()``,
-    ``testing.waterBox()``, ``testing.energyDrift()``, ...).
-special
-    The Jacobi elliptic functions and elliptic integrals that FreeRotor is built on.
+    An ``openmm.app.StateDataReporter`` with columns for translation and rotation, shadow work and heat.
+deserializeIntegrator, getSupportedPlatforms, pluginLoadFailures
+    An integrator from XML; the platforms that have the kernels, and why a GPU plugin did not load.
+FreeRotor, special
+    The exact torque-free motion of one rigid body, and the elliptic functions it is built on.
+
+``openmm.app`` is imported only when something that needs it is first used (the reporter, the
+topology helpers); importing this package changes nothing in ``openmm``.
 """
 
 from importlib.metadata import PackageNotFoundError, version as _distributionVersion
 
-from . import special, testing
+from . import special
 from .freerotor import FreeRotor
-from .integrator import (AccuracyWarning, NoThermostatError, RigidBodyIntegrator, RigidBodyIntegratorBase, RigidBodyLangevinIntegrator,
-                         deserializeIntegrator, getSupportedPlatforms, pluginLoadFailures)
+from .integrator import (AccuracyWarning, RigidBodyBussiIntegrator, RigidBodyIntegrator, RigidBodyIntegratorBase,
+                         RigidBodyLangevinIntegrator, deserializeIntegrator, getSupportedPlatforms, pluginLoadFailures)
 from .intrabody import removeIntraBodyInteractions
-from .reporters import RigidStateDataReporter
-from .topology import rigidBodiesFromTopology, rigidHydrogenGroups
+
+#: What needs openmm.app, imported on first use (PEP 562): name -> module.
+_LAZY = {"RigidStateDataReporter": "reporters", "rigidBodiesFromTopology": "topology", "rigidHydrogenGroups": "topology"}
+
+
+def __getattr__(name):
+    if name in _LAZY:
+        import importlib
+        value = getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(list(globals()) + list(_LAZY))
+
 
 try:
     __version__ = _distributionVersion("openmm-rigid")
 except PackageNotFoundError:  # imported from a source tree that was never installed
     __version__ = "unknown"
 
-__all__ = ["getSupportedPlatforms", "pluginLoadFailures", "NoThermostatError", "AccuracyWarning", "RigidBodyIntegrator", "RigidBodyLangevinIntegrator", "RigidBodyIntegratorBase", "RigidStateDataReporter", "deserializeIntegrator", "FreeRotor", "special", "testing",
-           "rigidBodiesFromTopology", "rigidHydrogenGroups", "removeIntraBodyInteractions", "__version__"]
+__all__ = ["RigidBodyIntegrator", "RigidBodyBussiIntegrator", "RigidBodyLangevinIntegrator", "RigidBodyIntegratorBase",
+           "AccuracyWarning", "rigidBodiesFromTopology", "rigidHydrogenGroups", "removeIntraBodyInteractions",
+           "RigidStateDataReporter", "deserializeIntegrator", "getSupportedPlatforms", "pluginLoadFailures", "FreeRotor",
+           "special", "__version__"]

@@ -30,8 +30,10 @@ __all__ = ["QUANTITY_ARGUMENTS", "QUANTITY_RESULTS", "numpyStyle", "fromCpp", "p
 #: so the position matters; keywords are converted too where the method takes them).
 QUANTITY_ARGUMENTS = {
     ("RigidBodyIntegrator", "__init__"): (("stepSize", unit.picosecond),),
-    ("RigidBodyIntegrator", "setThermostat"): (("temperature", unit.kelvin), ("collisionTime", unit.picosecond)),
-    ("RigidBodyIntegrator", "setTemperature"): (("temperature", unit.kelvin),),
+    ("RigidBodyBussiIntegrator", "__init__"): (("temperature", unit.kelvin), ("collisionTime", unit.picosecond),
+                                               ("stepSize", unit.picosecond)),
+    ("RigidBodyBussiIntegrator", "setTemperature"): (("temperature", unit.kelvin),),
+    ("RigidBodyBussiIntegrator", "setCollisionTime"): (("collisionTime", unit.picosecond),),
     ("RigidBodyLangevinIntegrator", "__init__"): (("temperature", unit.kelvin),
                                                   ("frictionCoeff", unit.picosecond**-1),
                                                   ("stepSize", unit.picosecond)),
@@ -43,21 +45,14 @@ QUANTITY_ARGUMENTS = {
 #: (class name, method name) -> the unit of the Quantity the method returns (the C++ returns the number
 #: in that unit).
 QUANTITY_RESULTS = {
-    ("RigidBodyIntegratorBase", "getBodyMoments"): unit.amu * unit.nanometer**2,
-    ("RigidBodyIntegratorBase", "getBodyMassMoments"): unit.amu * unit.nanometer**2,
     ("RigidBodyIntegratorBase", "getMinimumMomentOfInertia"): unit.amu * unit.nanometer**2,
-    ("RigidBodyIntegratorBase", "getTranslationalKineticEnergy"): unit.kilojoule_per_mole,
-    ("RigidBodyIntegratorBase", "getRotationalKineticEnergy"): unit.kilojoule_per_mole,
     ("RigidBodyIntegratorBase", "computeSystemTemperature"): unit.kelvin,
     ("RigidBodyIntegratorBase", "getShadowWork"): unit.kilojoule_per_mole,
     ("RigidBodyIntegratorBase", "getHeat"): unit.kilojoule_per_mole,
-    ("RigidBodyIntegrator", "getThermostatTemperature"): unit.kelvin,
-    ("RigidBodyIntegrator", "getTemperature"): unit.kelvin,
-    ("RigidBodyIntegrator", "getThermostatCollisionTime"): unit.picosecond,
-    ("RigidBodyIntegrator", "getThermostatWork"): unit.kilojoule_per_mole,
+    ("RigidBodyBussiIntegrator", "getTemperature"): unit.kelvin,
+    ("RigidBodyBussiIntegrator", "getCollisionTime"): unit.picosecond,
     ("RigidBodyLangevinIntegrator", "getTemperature"): unit.kelvin,
     ("RigidBodyLangevinIntegrator", "getFriction"): unit.picosecond**-1,
-    ("RigidBodyLangevinIntegrator", "getVelocityTimeOffset"): unit.picosecond,
     ("RigidBodyLangevinIntegrator", "getOnStepKineticEnergy"): unit.kilojoule_per_mole,
 }
 

@@ -3,18 +3,17 @@
 openmmtools (``pip install openmmtools``) drives free-energy and enhanced-sampling calculations
 through thermodynamic states, Context caches, MCMC moves and multistate samplers (replica exchange,
 parallel tempering, SAMS), across processes with MPI through mpiplus. The integrators of openmmrigid
-work there as they are: ``RigidBodyLangevinIntegrator``, and ``RigidBodyIntegrator`` with its
-thermostat (``setThermostat()``), expose ``getTemperature()`` and ``setTemperature()``, so
-``ThermodynamicState`` sees their heat bath, adds no ``AndersenThermostat`` and sets their temperature
-for each state; ``RigidBodyIntegrator`` without a thermostat raises ``openmmrigid.NoThermostatError``
-there (an ``AttributeError``), so it is treated as the NVE integrator it is. This module adds the
+work there as they are: ``RigidBodyLangevinIntegrator`` and ``RigidBodyBussiIntegrator`` expose
+``getTemperature()`` and ``setTemperature()``, so ``ThermodynamicState`` sees their heat bath, adds no
+``AndersenThermostat`` and sets their temperature for each state; ``RigidBodyIntegrator`` has no
+temperature, so it is treated as the NVE integrator it is. This module adds the
 moves, so that no user has to write them:
 
 RigidLangevinDynamicsMove
     Langevin dynamics with ``RigidBodyLangevinIntegrator`` (as openmmtools' ``LangevinDynamicsMove``
     runs ``LangevinMiddleIntegrator``).
 RigidBussiDynamicsMove
-    Dynamics with ``RigidBodyIntegrator`` and its stochastic velocity rescaling thermostat (Bussi,
+    Dynamics with ``RigidBodyBussiIntegrator``, the stochastic velocity rescaling thermostat (Bussi,
     Donadio and Parrinello, J. Chem. Phys. 126, 014101 (2007)), any splitting.
 
 Both are ``openmmtools.mcmc.BaseIntegratorMove`` subclasses: they run in a ``ContextCache`` (a Context
@@ -35,7 +34,7 @@ except ImportError as error:  # pragma: no cover - exercised only where openmmto
 
 import openmm.unit as unit
 
-from .integrator import RigidBodyIntegrator, RigidBodyLangevinIntegrator
+from .integrator import RigidBodyBussiIntegrator, RigidBodyIntegrator, RigidBodyLangevinIntegrator
 
 __all__ = ["RigidLangevinDynamicsMove", "RigidBussiDynamicsMove"]
 
@@ -162,7 +161,7 @@ class RigidLangevinDynamicsMove(_RigidDynamicsMove):
 
 
 class RigidBussiDynamicsMove(_RigidDynamicsMove):
-    """Dynamics of rigid bodies with ``openmmrigid.RigidBodyIntegrator`` and its stochastic velocity
+    """Dynamics of rigid bodies with ``openmmrigid.RigidBodyBussiIntegrator``, the stochastic velocity
     rescaling thermostat (Bussi, Donadio and Parrinello, J. Chem. Phys. 126, 014101 (2007)) as an MCMC move.
 
     Each application runs ``n_steps`` steps of the symplectic splitting chosen (exact free drifts),
@@ -213,8 +212,8 @@ class RigidBussiDynamicsMove(_RigidDynamicsMove):
         self.splitting = serialization["splitting"]
 
     def _get_integrator(self, thermodynamic_state):
-        """Implement BaseIntegratorMove._get_integrator(): a RigidBodyIntegrator with its thermostat at the state's temperature."""
-        integrator = RigidBodyIntegrator(self.timestep, *self._bodyArguments())
+        """Implement BaseIntegratorMove._get_integrator(): a RigidBodyBussiIntegrator at the state's temperature."""
+        integrator = RigidBodyBussiIntegrator(thermodynamic_state.temperature, self.collision_time, self.timestep,
+                                              *self._bodyArguments())
         integrator.setSplitting(_SPLITTINGS[self.splitting])
-        integrator.setThermostat(thermodynamic_state.temperature, self.collision_time)
         return self._configure(integrator)

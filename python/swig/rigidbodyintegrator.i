@@ -25,6 +25,7 @@
 #include "openmm/PythonForce.h"
 #include "openmm/RPMDIntegrator.h"
 #include "openmm/RPMDMonteCarloBarostat.h"
+#include "RigidBodyBussiIntegrator.h"
 #include "RigidBodyIntegrator.h"
 #include "RigidBodyLangevinIntegrator.h"
 #include "openmm/serialization/XmlSerializer.h"
@@ -160,8 +161,7 @@ RigidBodyIntegratorBase* deserializeRigidIntegrator(const std::string& xml) {
     RigidBodyIntegratorBase* rigid = dynamic_cast<RigidBodyIntegratorBase*>(integrator);
     if (rigid == NULL) {
         delete integrator;
-        throw OpenMM::OpenMMException("deserializeIntegrator: the XML does not describe a RigidBodyIntegrator or "
-                                      "a RigidBodyLangevinIntegrator");
+        throw OpenMM::OpenMMException("deserializeIntegrator: the XML describes no integrator of openmm-rigid");
     }
     return rigid;
 }
@@ -174,6 +174,11 @@ RigidBodyIntegratorBase* cloneRigidIntegrator(const RigidBodyIntegratorBase& int
 /** integrator as a RigidBodyIntegrator (not a copy), or NULL if it is another kind of Integrator. */
 RigidBodyIntegrator* asRigidBodyIntegrator(OpenMM::Integrator* integrator) {
     return dynamic_cast<RigidBodyIntegrator*>(integrator);
+}
+
+/** integrator as a RigidBodyBussiIntegrator (not a copy), or NULL if it is another kind of Integrator. */
+RigidBodyBussiIntegrator* asRigidBodyBussiIntegrator(OpenMM::Integrator* integrator) {
+    return dynamic_cast<RigidBodyBussiIntegrator*>(integrator);
 }
 
 /** integrator as a RigidBodyLangevinIntegrator (not a copy), or NULL if it is another kind of Integrator. */
@@ -260,6 +265,7 @@ import openmm as _openmm_package
 %rename(_cloneRigidIntegrator) OpenMMRigid::Python::cloneRigidIntegrator;
 %rename(_asRigidBodyIntegrator) OpenMMRigid::Python::asRigidBodyIntegrator;
 %rename(_asRigidBodyLangevinIntegrator) OpenMMRigid::Python::asRigidBodyLangevinIntegrator;
+%rename(_asRigidBodyBussiIntegrator) OpenMMRigid::Python::asRigidBodyBussiIntegrator;
 %newobject OpenMMRigid::Python::deserializeRigidIntegrator;
 %newobject OpenMMRigid::Python::cloneRigidIntegrator;
 // The options are the integrators' class constants (RigidBodyIntegrator.Exact, ...), not a class of their own.
@@ -267,6 +273,7 @@ import openmm as _openmm_package
 %include "RigidBodyOptions.h"
 %include "RigidBodyIntegratorBase.h"
 %include "RigidBodyIntegrator.h"
+%include "RigidBodyBussiIntegrator.h"
 
 %extend OpenMMRigid::RigidBodyIntegratorBase {
 %pythoncode %{

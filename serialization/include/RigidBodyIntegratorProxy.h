@@ -7,23 +7,21 @@
 namespace OpenMMRigid {
 
 /**
- * This is a proxy for serializing RigidBodyIntegrator objects. It writes the step size, constraint
- * tolerance, integration force groups, rotation method, splitting, thermostat, random number seed
- * and, when the bodies were given explicitly, the particle indices of each body:
+ * This is a proxy for serializing RigidBodyIntegrator objects. It writes the settings of
+ * RigidBodyIntegratorBase (step size, constraint tolerance, integration force groups, rotation method,
+ * minimum moment of inertia, multiple time steps, measurement and accuracy check switches, and, when the
+ * bodies were given explicitly, the particle indices of each body) and the splitting:
  *
- *     <Integrator type="RigidBodyIntegrator" version="3" stepSize=".." constraintTolerance=".."
- *                 integrationForceGroups=".." rotationMethod="0" splitting="0" thermostat="1"
- *                 thermostatTemperature=".." thermostatCollisionTime=".." randomSeed=".." explicitBodies="1">
+ *     <Integrator type="RigidBodyIntegrator" version="5" stepSize=".." rotationMethod="0" splitting="0" ...>
  *         <Bodies>
  *             <Body><Particle index="0"/><Particle index="1"/>...</Body>
- *             ...
  *         </Bodies>
  *     </Integrator>
  *
- * Every field but the step size (and, with thermostat="1", the thermostat's temperature and
- * collision time) is read with a default (the constructor's), so that files written
- * by earlier versions still load: version 1 (before the splitting was a setting) reads as Verlet,
- * versions 1 and 2 (before the thermostat) as no thermostat.
+ * Every field but the step size is read with a default (the constructor's), so that files of earlier
+ * versions load: version 1 (before the splitting was a setting) reads as Verlet; versions 3 and 4 with
+ * thermostat="1" (a RigidBodyIntegrator with a thermostat, before RigidBodyBussiIntegrator was a class)
+ * read as a RigidBodyBussiIntegrator.
  */
 class OPENMM_EXPORT_RIGID RigidBodyIntegratorProxy : public OpenMM::SerializationProxy {
 public:

@@ -47,7 +47,7 @@ void* RigidBodyLangevinIntegratorProxy::deserialize(const SerializationNode& nod
         integrator.reset(new RigidBodyLangevinIntegrator(temperature, friction, stepSize));
     deserializeRigidIntegratorSettings(node, *integrator);
     integrator->setRandomNumberSeed(node.getIntProperty("randomSeed", integrator->getRandomNumberSeed()));
-    return integrator.release();
+    return static_cast<Integrator*>(integrator.release());
 }
 
 } // namespace OpenMMRigid

@@ -27,7 +27,6 @@ void serializeRigidIntegratorBase(const RigidBodyIntegratorBase& integrator, Ser
     // System", so the flag is written on its own, not inferred from the number of bodies.
     node.setBoolProperty("explicitBodies", integrator.hasExplicitBodies());
     node.setBoolProperty("measureShadowWork", integrator.getMeasureShadowWork());
-    node.setBoolProperty("measureHeat", integrator.getMeasureHeat());
     node.setBoolProperty("accuracyCheck", integrator.getAccuracyCheck());
     if (!integrator.getForceGroupSubsteps().empty()) {
         SerializationNode& substeps = node.createChildNode("ForceGroupSubsteps");
@@ -67,8 +66,8 @@ void deserializeRigidIntegratorSettings(const SerializationNode& node, RigidBody
     integrator.setRotationMethod(static_cast<RigidBodyIntegratorBase::RotationMethod>(method));
     // Files written before the moments could be raised have none raised.
     integrator.setMinimumMomentOfInertia(node.getDoubleProperty("minimumMomentOfInertia", 0.0));
-    integrator.setMeasureShadowWork(node.getBoolProperty("measureShadowWork", integrator.getMeasureShadowWork()));
-    integrator.setMeasureHeat(node.getBoolProperty("measureHeat", integrator.getMeasureHeat()));
+    // Files written when the heat had a switch of its own measure both if they measured either.
+    integrator.setMeasureShadowWork(node.getBoolProperty("measureShadowWork", false) || node.getBoolProperty("measureHeat", false));
     integrator.setAccuracyCheck(node.getBoolProperty("accuracyCheck", integrator.getAccuracyCheck()));
     if (const SerializationNode* substepsNode = findChild(node, "ForceGroupSubsteps")) {
         vector<pair<int, int> > substeps;

@@ -5,6 +5,8 @@
  * RigidBodyLangevinIntegratorProxy with nothing for the caller to do. registerRigidSerializationProxies()
  * is exported as well and may be called again.
  */
+#include "RigidBodyBussiIntegrator.h"
+#include "RigidBodyBussiIntegratorProxy.h"
 #include "RigidBodyIntegrator.h"
 #include "RigidBodyIntegratorProxy.h"
 #include "RigidBodyLangevinIntegrator.h"
@@ -31,6 +33,8 @@ extern "C" OPENMM_EXPORT_RIGID void registerRigidSerializationProxies() {
     registered = true;
     OpenMM::SerializationProxy::registerProxy(typeid(OpenMMRigid::RigidBodyIntegrator),
                                               new OpenMMRigid::RigidBodyIntegratorProxy());
+    OpenMM::SerializationProxy::registerProxy(typeid(OpenMMRigid::RigidBodyBussiIntegrator),
+                                              new OpenMMRigid::RigidBodyBussiIntegratorProxy());
     OpenMM::SerializationProxy::registerProxy(typeid(OpenMMRigid::RigidBodyLangevinIntegrator),
                                               new OpenMMRigid::RigidBodyLangevinIntegratorProxy());
 }

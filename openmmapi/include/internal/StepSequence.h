@@ -43,6 +43,11 @@ struct StepState {
     bool potentialKnown = false;
 };
 
+/** The heat bath of RigidBodyBussiIntegrator's stochastic velocity rescaling: its temperature (K) and collision time (ps). */
+struct BussiBath {
+    double temperature = 0.0, collisionTime = 0.0;
+};
+
 /**
  * Take the thermostat's work the kernel has summed since it was last taken into state.thermostatWork,
  * and into state.heat if measureHeat; returns it. On a GPU this waits for the device.
@@ -65,7 +70,7 @@ OPENMM_EXPORT_RIGID StepGeometry currentGeometry(OpenMM::ContextImpl& context, c
 /**
  * One step of RigidBodyIntegrator, on any platform: the kicks and drifts of its splitting
  * (internal/Splitting.h) with the virtual sites placed and the forces evaluated after each drift,
- * then, if it has one, the thermostat's rescaling of every momentum. On entry the Context holds the
+ * then, with a bath (RigidBodyBussiIntegrator; NULL for constant energy), the thermostat's rescaling of every momentum. On entry the Context holds the
  * forces at the current positions and the kernel's bodies agree with them (and, if shadow work is
  * measured, state.potentialEnergy is their energy); on exit it holds the forces at the new positions.
  *
@@ -75,7 +80,7 @@ OPENMM_EXPORT_RIGID StepGeometry currentGeometry(OpenMM::ContextImpl& context, c
  * kernel sums both (the step reads nothing back unless it measures the shadow work).
  */
 OPENMM_EXPORT_RIGID void stepRigidBodyIntegrator(OpenMM::ContextImpl& context, IntegrateRigidBodyStepKernel& kernel,
-        const RigidBodyIntegrator& integrator, const RigidBodySystem& bodies, StepState& state);
+        const RigidBodyIntegrator& integrator, const BussiBath* bath, const RigidBodySystem& bodies, StepState& state);
 
 /**
  * One step of RigidBodyLangevinIntegrator, on any platform: kick, half drift, Ornstein-Uhlenbeck
