@@ -3,16 +3,23 @@
 The classes are SWIG proxies (python/swig/rigidbodyintegrator.i and rigidbodylangevinintegrator.i),
 subclasses of ``openmm.Integrator`` through their common base ``RigidBodyIntegratorBase``. Importing this
 module loads the platform kernels (``libOpenMMRigidReference.so`` from this package's folder, and the GPU
-plugins beside it where their platforms exist) with ``openmm.Platform.loadPluginLibrary``; it changes
-nothing in the ``openmm`` module. The serialization proxies are registered by libOpenMMRigid when it loads.
+plugins beside it where their platforms exist) with ``openmm.Platform.loadPluginLibrary``. The serialization
+proxies are registered by libOpenMMRigid when it loads.
 
 OpenMM's wrappers turn an Integrator they return into the most derived class they know of, which stops at
-``openmm.Integrator`` for a plugin's classes: ``openmm.XmlSerializer.deserialize()`` and
-``CompoundIntegrator.getIntegrator()`` hand back an ``openmm.Integrator`` that runs ours but has none of
-its methods. ``deserializeIntegrator()`` returns the right class; ``copy``, ``pickle`` and
-``Context.getIntegrator()`` keep it.
+``openmm.Integrator`` for a plugin's classes: ``openmm.XmlSerializer.deserialize()`` hands back an
+``openmm.Integrator`` that runs ours but has none of its methods. ``deserializeIntegrator()`` returns the
+right class; ``copy``, ``pickle`` and ``Context.getIntegrator()`` keep it.
+
+One method of openmm is wrapped, ``CompoundIntegrator.getIntegrator`` (``_patchCompoundIntegrator``): tools
+that walk a compound integrator (openmmtools' ``ThermodynamicState`` finds each heat bath by calling
+``getTemperature()`` on ``compound.getIntegrator(i)``) would otherwise see no heat bath in our integrators,
+set no temperature on them and add an ``AndersenThermostat`` at the state's temperature: a silent wrong
+ensemble. No other way reaches those tools. The wrapper returns our class for ours and the same object as
+before for every other integrator.
 """
 
+import functools
 import os
 import sys
 import warnings
@@ -126,6 +133,20 @@ def _mostDerived(integrator):
     return integrator
 
 
+def _patchCompoundIntegrator():
+    """Wrap CompoundIntegrator.getIntegrator, once, so that it returns our classes for ours (the compound keeps
+    owning the integrator, as with stock ones). See the module's docstring for why."""
+    original = openmm.CompoundIntegrator.getIntegrator
+    if hasattr(original, "_openmmrigidOriginal"):
+        return
+
+    def getIntegrator(self, *args):
+        return _mostDerived(original(self, *args))
+    functools.update_wrapper(getIntegrator, original)
+    getIntegrator._openmmrigidOriginal = original
+    openmm.CompoundIntegrator.getIntegrator = getIntegrator
+
+
 def deserializeIntegrator(xml):
     """Reconstruct an integrator of openmm-rigid from the XML that ``openmm.XmlSerializer.serialize`` wrote.
 
@@ -151,3 +172,4 @@ def deserializeIntegrator(xml):
 
 
 _loadKernels()
+_patchCompoundIntegrator()

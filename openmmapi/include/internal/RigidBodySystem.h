@@ -136,10 +136,6 @@ public:
     }
     /** Whether any body's moments were raised (some getInertiaScale() is not 1). */
     bool hasRaisedMoments() const;
-    /** The moment every nonzero principal moment is raised to, at least (0: none), in amu nm^2. */
-    double getMinimumMoment() const {
-        return minimumMoment;
-    }
     /** Body b's kind (a RigidKind). */
     int getKind(int b) const {
         return shapes[b].kind;
@@ -206,10 +202,6 @@ public:
     const std::vector<int>& getBodySet(BodySet set) const {
         return bodySets[set];
     }
-    /** For each particle, the body it belongs to, or -1. */
-    const std::vector<int>& getBodyOfParticle() const {
-        return bodyOfParticle;
-    }
     /** A copy of the System's particles with only the constraints among free particles, or null if there are none. */
     const OpenMM::System* getFreeConstraintSystem() const {
         return freeConstraints.get();
@@ -217,10 +209,6 @@ public:
     /** The mass of every particle of the System (the one copy the plugin keeps). */
     const std::vector<double>& getMasses() const {
         return masses;
-    }
-    /** The constraints inside body b (dropped from the dynamics; applied to the positions an explicit body takes its shape from). */
-    const std::vector<InternalConstraint>& getInternalConstraints(int b) const {
-        return internalConstraints[b];
     }
     /**
      * The largest cutoff of the System's NonbondedForce and CustomNonbondedForce objects, in nm

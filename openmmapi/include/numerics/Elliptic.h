@@ -62,15 +62,6 @@ inline double carlsonRF(double x, double y, double z) {
 }
 
 /**
- * Carlson's degenerate integral RC(1, 1 + e) for e > -1 (DLMF 19.2.17 and 19.2.18): atan(sqrt(e))/sqrt(e)
- * for e > 0 and atanh(sqrt(-e))/sqrt(-e) for e < 0, with a series near e = 0. The caller passes 1 + e
- * as well, computed without cancellation, since near e = -1 the result depends on it alone.
- */
-inline double carlsonRCOnePlus(double e, double onePlusE) {
-    return rigidCarlsonRCOnePlus(e, onePlusE);
-}
-
-/**
  * Carlson's symmetric integral RJ(x, y, z, p) = 3/2 int_0^inf dt / ((t+p) sqrt((t+x)(t+y)(t+z))) for
  * x, y, z >= 0 (at most one zero) and p > 0 (DLMF 19.16.2), by the duplication theorem with the
  * RC correction terms of Carlson (1995), eqs. (2.36)-(2.39), and DLMF 19.36.2.

@@ -91,20 +91,6 @@ inline double orthonormalityError(const Matrix3& a) {
     return worst;
 }
 
-/**
- * Rodrigues' formula: U(x) = exp(W(x)) with W(x) v = x cross v, the rotation by the angle |x| about
- * x/|x| (van Zon & Schofield (2007) eq. (3.24)); the core's rigidRotationMatrix().
- */
-inline Matrix3 rotationMatrix(const Vector3& x) {
-    double r[3][3];
-    rigidRotationMatrix(x.data(), r);
-    Matrix3 result;
-    for (int i = 0; i < 3; i++)
-        for (int j = 0; j < 3; j++)
-            result[i][j] = r[i][j];
-    return result;
-}
-
 } // namespace OpenMMRigid
 
 #endif // OPENMMRIGID_NUMERICS_MATRIX3_H_
