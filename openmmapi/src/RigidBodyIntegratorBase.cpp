@@ -78,9 +78,8 @@ void checkAndersenThermostat(const System& system, const vector<vector<int> >& b
     // Each redraw is a Maxwell-Boltzmann draw for the particles' masses: the rotation it gives a body
     // is that of its own moments, which the projection keeps, so raised moments would be heated by I'/I.
     if (raisedMoments)
-        throw OpenMMException(className + ": the System's AndersenThermostat draws velocities for the particles' own moments "
-                "of inertia, not the raised ones (setMinimumMomentOfInertia()); thermostat with the integrator instead "
-                "(RigidBodyLangevinIntegrator, or RigidBodyIntegrator.setThermostat())");
+        throw OpenMMException(className + ": an AndersenThermostat cannot be used with raised moments of inertia (it draws "
+                "for the particles' own); use RigidBodyLangevinIntegrator or RigidBodyBussiIntegrator instead");
     // Bodies found from constraints are whole clusters: only explicit ones can be split.
     if (!explicitBodies)
         return;
@@ -101,13 +100,10 @@ void checkAndersenThermostat(const System& system, const vector<vector<int> >& b
     for (size_t b = 0; b < bodies.size(); b++)
         for (int p : bodies[b])
             if (root(p) != root(bodies[b][0]))
-                throw OpenMMException(className + ": the System has an AndersenThermostat, which redraws velocities per "
-                        "constraint cluster (particle by particle where there are no constraints), but the constraints do not "
-                        "join particles " + to_string(bodies[b][0]) + " and " + to_string(p) + " of body " + to_string(b) +
-                        ": each collision would redraw part of the body, and its rigid motion would read cold. Remove the "
-                        "AndersenThermostat and thermostat with the integrator (RigidBodyIntegrator.setThermostat() or "
-                        "RigidBodyLangevinIntegrator; openmmtools then adds none), or keep the constraints that hold "
-                        "the body together");
+                throw OpenMMException(className + ": the System's AndersenThermostat would redraw body " + to_string(b) +
+                        " in parts (no constraints join its particles " + to_string(bodies[b][0]) + " and " + to_string(p) +
+                        "), which cools it; use RigidBodyLangevinIntegrator or RigidBodyBussiIntegrator instead, or keep the "
+                        "body's constraints");
 }
 
 } // namespace
@@ -343,9 +339,8 @@ void RigidBodyIntegratorBase::initialize(ContextImpl& contextRef) {
         // without asking the integrators it holds, and its other integrators move the bodies with the
         // moments of their masses: neither is the ensemble of raised moments.
         if (minimumMoment > 0.0 && dynamic_cast<CompoundIntegrator*>(&contextRef.getIntegrator()) != NULL)
-            throw OpenMMException(className + ": raised moments of inertia (setMinimumMomentOfInertia()) cannot be used in a "
-                    "CompoundIntegrator, whose setVelocitiesToTemperature() and other integrators use the particles' own moments; "
-                    "use this integrator on its own");
+            throw OpenMMException(className + ": raised moments of inertia cannot be used in a CompoundIntegrator, whose "
+                    "other integrators move the particles' own moments; use this integrator on its own");
         levels = timeStepLevels(groupSubsteps, getIntegrationForceGroups(), className);
         if (levels.size() > 1) {
             int fastGroups = 0;
