@@ -12,13 +12,14 @@ Lennard-Jones cutoff 1.0 nm, switched from 0.9 nm, with the long-range dispersio
 
 Each molecule is one explicit body, RigidBodyIntegrator(stepSize, bodies); no constraints and no
 bonded terms. Benzene is a symmetric top (oblate: the moment about the six-fold axis is the sum of
-the two equal in-plane ones), and the integrator says so (getBodyKind). Random packing of flat
+the two equal in-plane ones), and the integrator classifies it so by its moments. Random packing of flat
 molecules jams below liquid density, so the box is packed at random at about half the density and
 compressed in stages of 2 % in edge, each followed by 0.1 ps of equilibration with the same
 integrator and Andersen-style velocity redraws; then more equilibration and an NVE run. The script
-prints the body kinds and moments, the energy drift and fluctuation, the translational and
-rotational temperatures (3 + 3 degrees of freedom per molecule: they must agree), and how rigid and
-how flat the molecules stayed.
+prints the body kinds and moments (from the masses and positions), the energy drift and fluctuation,
+the translational and rotational temperatures (from the velocities in the State; 3 + 3 degrees of
+freedom per molecule: they must agree), and how rigid and how flat the molecules stayed. The helpers
+come from examples/_molecules.py.
 
     python examples/benzene.py [--molecules 128] [--step 2] [--time 10] [--method Exact]
 
@@ -28,18 +29,21 @@ The default settings take about a minute on two cores.
 import argparse
 import dataclasses
 import time
+from collections import Counter
 
 import numpy as np
 import openmm
 from openmm import unit
 
 import openmmrigid
-from openmmrigid import testing
+from _molecules import (RigidMolecule, bodyKinds, boxEdge, compressBox, degreesOfFreedom, energyDrift,
+                        equilibrateByRedraws, principalMoments, rigidMoleculeBox, rigidTemperatures, sampleNVE,
+                        shapeDeviations)
 
 KILOJOULES_PER_KILOCALORIE = 4.184
 RING, CARBON_HYDROGEN = 0.140, 0.108  # nm: C-C (the ring's radius) and C-H
 _ANGLES = np.radians(60.0*np.arange(6))
-OPLS_BENZENE = testing.RigidMolecule(
+OPLS_BENZENE = RigidMolecule(
     name="benzene", masses=[12.011]*6 + [1.008]*6,
     coordinates=[[r*np.cos(a), r*np.sin(a), 0.0] for r in (RING, RING + CARBON_HYDROGEN) for a in _ANGLES],
     charges=[-0.115]*6 + [0.115]*6, sigmas=[0.355]*6 + [0.242]*6,
@@ -67,28 +71,28 @@ def main():
 
     # Packed at random at half the density (random packing jams near 0.8 g/cm^3), then compressed.
     molecule = dataclasses.replace(OPLS_BENZENE, combining=args.combining)
-    system, positions, bodies = testing.rigidMoleculeBox(molecule, args.molecules, PACKING_DENSITY, args.seed)
+    system, positions, bodies = rigidMoleculeBox(molecule, args.molecules, PACKING_DENSITY, args.seed)
     integrator = openmmrigid.RigidBodyIntegrator(args.step*unit.femtosecond, bodies)
     integrator.setRotationMethod(getattr(openmmrigid.RigidBodyIntegrator, args.method))
     context = openmm.Context(system, integrator, openmm.Platform.getPlatformByName(args.platform))
     context.setPositions(positions)
-    edge = testing.boxEdge(OPLS_BENZENE, args.molecules, args.density)
-    dof = integrator.getNumDegreesOfFreedom()
-    moments = integrator.getBodyMoments(0).value_in_unit(unit.amu*unit.nanometer**2)
+    edge = boxEdge(OPLS_BENZENE, args.molecules, args.density)
+    # The bodies' kinds and moments, from their masses and positions (the integrator classifies them the same way).
+    kinds = bodyKinds(system, positions, bodies)
+    dof = degreesOfFreedom(system, bodies, kinds)
+    moments = principalMoments(OPLS_BENZENE.masses, OPLS_BENZENE.coordinates)
     print(f"{args.molecules} OPLS-AA benzene molecules ({args.combining} combining), {args.density:g} g/cm^3 "
           f"(box {edge:.3f} nm), {args.temperature:g} K, platform {args.platform}")
-    print(f"bodies: {integrator.getNumBodies()}, kinds {testing.bodyKinds(integrator)} (getBodyKind(0) = "
-          f"{integrator.getBodyKind(0)!r}); moments {np.round(moments, 5).tolist()} amu nm^2 "
-          f"(I3/(I1 + I2) = {moments[2]/(moments[0] + moments[1]):.12f}); {dof} degrees of freedom")
+    print(f"bodies: {integrator.getNumBodies()}, kinds {dict(Counter(kinds))}; moments {np.round(moments, 5).tolist()} "
+          f"amu nm^2 (I3/(I1 + I2) = {moments[2]/(moments[0] + moments[1]):.12f}); {dof} degrees of freedom")
 
-    stages = testing.compressBox(context, integrator, bodies, edge, args.temperature, picosecondsPerStage=0.1,
-                                 seed=args.seed)
-    testing.equilibrateByRedraws(context, integrator, args.temperature, args.equilibrate, seed=args.seed)
+    stages = compressBox(context, integrator, bodies, edge, args.temperature, picosecondsPerStage=0.1, seed=args.seed)
+    equilibrateByRedraws(context, integrator, args.temperature, args.equilibrate, seed=args.seed)
     steps = int(round(args.time/(args.step*1e-3)))
-    run = testing.sampleNVE(context, integrator, steps, max(1, steps//500))
-    drift, fluctuation = testing.energyDrift(run.times, run.energies, dof)
-    temperatures = testing.rigidTemperatures(run, args.molecules, 3)
-    change, extents = testing.shapeDeviations(context, bodies, positions)
+    run = sampleNVE(context, integrator, steps, max(1, steps//500), bodies)
+    drift, fluctuation = energyDrift(run.times, run.energies, dof)
+    temperatures = rigidTemperatures(run, args.molecules, 3)
+    change, extents = shapeDeviations(context, bodies, positions)
     print(f"\nNVE, {args.method} rotation, {args.time:g} ps at {args.step:g} fs ({steps} steps, "
           f"{run.secondsPerStep*1e3:.2f} ms/step) after compression from {PACKING_DENSITY:g} g/cm^3 "
           f"({stages} stages of 0.1 ps) and {args.equilibrate:g} ps of equilibration:")

@@ -13,10 +13,11 @@ sites are singular); stock OpenMM needs a workaround for it (the atoms as massle
 two massive dummy sites chosen to carry the mass and the moment of inertia). Here each molecule is
 simply one explicit body, RigidBodyIntegrator(stepSize, bodies). The box is packed
 at random, equilibrated with the same integrator and Andersen-style velocity redraws, then run NVE.
-The script prints the body kinds and degrees of freedom, the energy drift and fluctuation, the
-translational and rotational temperatures (equipartition: a linear body has 3 translational and 2
-rotational degrees of freedom, and both temperatures must agree), and how rigid and how linear the
-molecules stayed.
+The script prints the body kinds and degrees of freedom (counted from the masses and positions, as
+the integrator does), the energy drift and fluctuation, the translational and rotational
+temperatures (from the velocities in the State; equipartition: a linear body has 3 translational and
+2 rotational degrees of freedom, and both temperatures must agree), and how rigid and how linear the
+molecules stayed. The helpers come from examples/_molecules.py.
 
     python examples/co2_box.py [--molecules 256] [--step 2] [--time 10] [--method Exact]
 
@@ -25,17 +26,20 @@ The default settings take under a minute on two cores.
 
 import argparse
 import time
+from collections import Counter
 
 import numpy as np
 import openmm
 from openmm import unit
 
 import openmmrigid
-from openmmrigid import testing
+from _molecules import (MOLAR_GAS_CONSTANT, RigidMolecule, bodyKinds, degreesOfFreedom, energyDrift,
+                        equilibrateByRedraws, principalMoments, rigidMoleculeBox, rigidTemperatures, sampleNVE,
+                        shapeDeviations)
 
-BOLTZMANN = testing.MOLAR_GAS_CONSTANT  # kJ/mol/K: TraPPE gives epsilon/k in K
+BOLTZMANN = MOLAR_GAS_CONSTANT  # kJ/mol/K: TraPPE gives epsilon/k in K
 CARBON_OXYGEN = 0.116  # nm
-TRAPPE_CO2 = testing.RigidMolecule(
+TRAPPE_CO2 = RigidMolecule(
     name="CO2", masses=[12.011, 15.999, 15.999],
     coordinates=[[0, 0, 0], [0, 0, CARBON_OXYGEN], [0, 0, -CARBON_OXYGEN]],
     charges=[0.70, -0.35, -0.35], sigmas=[0.280, 0.305, 0.305],
@@ -56,27 +60,28 @@ def main():
     args = parser.parse_args()
     started = time.perf_counter()
 
-    system, positions, bodies = testing.rigidMoleculeBox(TRAPPE_CO2, args.molecules, args.density, args.seed)
+    system, positions, bodies = rigidMoleculeBox(TRAPPE_CO2, args.molecules, args.density, args.seed)
     integrator = openmmrigid.RigidBodyIntegrator(args.step*unit.femtosecond, bodies)
     integrator.setRotationMethod(getattr(openmmrigid.RigidBodyIntegrator, args.method))
     context = openmm.Context(system, integrator, openmm.Platform.getPlatformByName(args.platform))
     context.setPositions(positions)
     edge = system.getDefaultPeriodicBoxVectors()[0][0].value_in_unit(unit.nanometer)
-    dof = integrator.getNumDegreesOfFreedom()
-    moments = integrator.getBodyMoments(0).value_in_unit(unit.amu*unit.nanometer**2)
+    # The bodies' kinds and moments, from their masses and positions (the integrator classifies them the same way).
+    kinds = bodyKinds(system, positions, bodies)
+    dof = degreesOfFreedom(system, bodies, kinds)
+    moments = principalMoments(TRAPPE_CO2.masses, TRAPPE_CO2.coordinates)
     print(f"{args.molecules} TraPPE CO2 molecules, {args.density:g} g/cm^3 (box {edge:.3f} nm), {args.temperature:g} K, "
           f"platform {args.platform}")
-    print(f"bodies: {integrator.getNumBodies()}, kinds {testing.bodyKinds(integrator)}, moments "
-          f"{np.round(moments, 5).tolist()} amu nm^2; {dof} degrees of freedom "
-          f"(3 + 2 per body)")
+    print(f"bodies: {integrator.getNumBodies()}, kinds {dict(Counter(kinds))}, moments "
+          f"{np.round(moments, 5).tolist()} amu nm^2; {dof} degrees of freedom (3 + 2 per body)")
 
-    testing.equilibrateByRedraws(context, integrator, args.temperature, args.equilibrate, seed=args.seed)
+    equilibrateByRedraws(context, integrator, args.temperature, args.equilibrate, seed=args.seed)
     steps = int(round(args.time/(args.step*1e-3)))
-    run = testing.sampleNVE(context, integrator, steps, max(1, steps//500))
-    drift, fluctuation = testing.energyDrift(run.times, run.energies, dof)
+    run = sampleNVE(context, integrator, steps, max(1, steps//500), bodies)
+    drift, fluctuation = energyDrift(run.times, run.energies, dof)
     (translational, translationalError), (rotational, rotationalError), (excess, excessError) = \
-        testing.rigidTemperatures(run, args.molecules, 2)
-    change, extents = testing.shapeDeviations(context, bodies, positions)
+        rigidTemperatures(run, args.molecules, 2)
+    change, extents = shapeDeviations(context, bodies, positions)
     print(f"\nNVE, {args.method} rotation, {args.time:g} ps at {args.step:g} fs ({steps} steps, "
           f"{run.secondsPerStep*1e3:.2f} ms/step) after {args.equilibrate:g} ps of equilibration:")
     print(f"  energy drift {drift:+.4f} kJ/mol/ns/dof, fluctuation {fluctuation:.3f} kJ/mol")

@@ -1,9 +1,10 @@
 """Parallel tempering of a rigid solute in rigid water with openmmtools, serially or across MPI
 processes, analysed with MBAR.
 
-Alanine dipeptide (one rigid body: its three residues merged through their bonds) in TIP3P water
-(every water a rigid body), PME, built as in examples/rigid_solute.py. openmmtools'
-ParallelTemperingSampler runs replicas at temperatures spaced geometrically from --tmin to --tmax;
+Alanine dipeptide (one rigid body: its three residues merged through their bonds; read from
+examples/data/alanine-dipeptide.pdb) in TIP3P water (every water a rigid body), PME, built as in
+examples/rigid_solute.py. openmmtools' ParallelTemperingSampler runs replicas at temperatures spaced
+geometrically from --tmin to --tmax;
 each iteration applies openmmrigid.openmmtools.RigidLangevinDynamicsMove (RigidBodyLangevinIntegrator,
 the exact free drift of every body) to every replica, then swaps temperatures (Gibbs sampling over
 all pairs). openmmtools sees the integrator's heat bath, so no AndersenThermostat is added, and one
@@ -47,7 +48,7 @@ KB = unit.MOLAR_GAS_CONSTANT_R.value_in_unit(unit.kilojoule_per_mole / unit.kelv
 
 def build(padding, platform):
     """The solvated solute, minimized with the full flexible System: (topology, lean System, bodies, positions, box)."""
-    pdb = openmmrigid.testing.alanineDipeptide()
+    pdb = app.PDBFile(str(Path(__file__).resolve().parent / "data" / "alanine-dipeptide.pdb"))
     forceField = app.ForceField("amber14-all.xml", "amber14/tip3p.xml")
     modeller = app.Modeller(pdb.topology, pdb.positions)
     modeller.addSolvent(forceField, model="tip3p", padding=padding * unit.nanometer)

@@ -1,9 +1,9 @@
 """A rigid solute in rigid water from a PDB: rigidBodiesFromTopology and removeIntraBodyInteractions.
 
 Alanine dipeptide (ACE-ALA-NME: a small solute spanning three residues, amber14 parameters) is read
-from a PDB (the one the package ships, openmmrigid.testing.alanineDipeptide(): use app.PDBFile on
-your own file the same way) and solvated with openmm.app.Modeller (TIP3P, 1 nm padding); ForceField.createSystem
-builds the System as for any simulation (PME, constraints=HBonds, rigidWater=True). Then, in two lines,
+from a PDB file with app.PDBFile (examples/data/alanine-dipeptide.pdb: use your own file the same
+way) and solvated with openmm.app.Modeller (TIP3P, 1 nm padding); ForceField.createSystem builds the
+System as for any simulation (PME, constraints=HBonds, rigidWater=True). Then, in two lines,
 
     bodies = openmmrigid.rigidBodiesFromTopology(topology, ["ACE", "ALA", "NME", "HOH"], mergeBonded=True, system=system)
     lean = openmmrigid.removeIntraBodyInteractions(system, bodies)
@@ -26,6 +26,7 @@ examples/output/rigid_solute.pdb (the last frame, molecules whole).
 import argparse
 import sys
 import time
+from collections import Counter
 from pathlib import Path
 
 import numpy as np
@@ -33,7 +34,9 @@ import openmm
 from openmm import app, unit
 
 import openmmrigid
+from _molecules import bodyKinds, degreesOfFreedom
 
+SOLUTE = Path(__file__).resolve().parent / "data" / "alanine-dipeptide.pdb"
 
 
 def potentialEnergy(system, positions, platform):
@@ -57,7 +60,7 @@ def main():
     platform = openmm.Platform.getPlatformByName(args.platform)
 
     print("reading the solute, solvating it with Modeller and building the System ...", flush=True)
-    pdb = openmmrigid.testing.alanineDipeptide()
+    pdb = app.PDBFile(str(SOLUTE))
     forceField = app.ForceField("amber14-all.xml", "amber14/tip3p.xml")
     modeller = app.Modeller(pdb.topology, pdb.positions)
     modeller.addSolvent(forceField, model="tip3p", padding=1.0*unit.nanometer)
@@ -97,11 +100,12 @@ def main():
     simulation = app.Simulation(modeller.topology, model, integrator, platform)
     simulation.context.setPositions(positions)
     simulation.context.setVelocitiesToTemperature(300*unit.kelvin, 22)
-    kinds = {}
-    for index in range(integrator.getNumBodies()):
-        kinds[integrator.getBodyKind(index)] = kinds.get(integrator.getBodyKind(index), 0) + 1
+    # The bodies' kinds by their principal moments (from masses and positions) and the degrees of freedom they
+    # leave: 3 per body and 3 more (2 for a linear one), less 3 for the CMMotionRemover.
+    kinds = bodyKinds(model, positions.value_in_unit(unit.nanometer), bodies)
+    dof = degreesOfFreedom(model, bodies, kinds)
     print(f"running {'the full' if args.keep_internal else 'the lean'} System: {integrator.getNumBodies()} bodies "
-          f"({', '.join(f'{n} {k}' for k, n in sorted(kinds.items()))}), {integrator.getNumDegreesOfFreedom()} degrees "
+          f"({', '.join(f'{n} {k}' for k, n in sorted(Counter(kinds).items()))}), {dof} degrees "
           f"of freedom; RigidBodyLangevinIntegrator at 300 K, 1/ps, {args.step:g} fs, {args.time:g} ps\n", flush=True)
     # The velocities drawn for every atom keep their temperature when they are projected onto the bodies (the
     # projection removes the non-rigid share of the energy together with its degrees of freedom); a short warm-up
@@ -129,7 +133,7 @@ def main():
     print(f"E(full System) - E(lean System): {offsetStart:.4f} kJ/mol at the start, {offsetEnd:.4f} at the end: the "
           "energy of the removed terms, a constant (to the CPU platform's single-precision rounding)")
     print("Temperature columns: 'Temperature' counts every degree of freedom the integrator moves "
-          f"({integrator.getNumDegreesOfFreedom()}); the translational and rotational ones count 3 per body (and free "
+          f"({dof}); the translational and rotational ones count 3 per body (and free "
           "particle), less 3 for the CMMotionRemover, and 3 per rigid body that is not linear: each should read 300 K "
           "within its noise (RigidBodyLangevinIntegrator reports LangevinMiddleIntegrator's half-step velocities, "
           "whose temperature is the bath's at any stable step; see the README).")

@@ -24,6 +24,7 @@ import openmm
 from openmm import app, unit
 
 import openmmrigid
+from _molecules import WATERS_PER_CUBIC_NANOMETRE, degreesOfFreedom, energyDrift
 
 
 class Run:
@@ -61,6 +62,18 @@ def runInterleaved(runs, steps, sampleEvery):
             print(f"  ... {(number + 1)*sampleEvery} of {steps} steps", flush=True)
 
 
+def waterBox(model, edge):
+    """A periodic cubic box of rigid water with the given edge (nm), built with openmm.app: PME, a 0.9 nm
+    cutoff (at most 0.45 of the edge), rigid water; (topology, positions, system)."""
+    forceField = app.ForceField(f"{model}.xml")
+    modeller = app.Modeller(app.Topology(), [])
+    modeller.addSolvent(forceField, model=model, boxSize=openmm.Vec3(edge, edge, edge)*unit.nanometer)
+    system = forceField.createSystem(modeller.topology, nonbondedMethod=app.PME,
+                                     nonbondedCutoff=min(0.9, 0.45*edge)*unit.nanometer, constraints=app.HBonds,
+                                     rigidWater=True, ewaldErrorTolerance=5e-4)
+    return modeller.topology, modeller.positions, system
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--molecules", type=int, default=500, help="approximate number of waters (default 500)")
@@ -74,9 +87,7 @@ def main():
     platform = openmm.Platform.getPlatformByName(args.platform)
     started = time.perf_counter()
     print(f"building a box of about {args.molecules} {args.model.upper()} waters with openmm.app ...", flush=True)
-    topology, positions, system = openmmrigid.testing.waterBox(
-        args.model, edge=(args.molecules/openmmrigid.testing.WATERS_PER_CUBIC_NANOMETRE)**(1/3),
-        constraints=app.HBonds)
+    topology, positions, system = waterBox(args.model, edge=(args.molecules/WATERS_PER_CUBIC_NANOMETRE)**(1/3))
     waters = topology.getNumResidues()
     print(f"{waters} {args.model.upper()} waters, {system.getNumParticles()} particles, PME, platform {args.platform}")
 
@@ -96,7 +107,7 @@ def main():
     steps = int(round(args.time/(args.step/1000)))
     sampleEvery = max(1, steps//200)
     steps -= steps % sampleEvery
-    dof = openmmrigid.testing.degreesOfFreedom(system)
+    dof = degreesOfFreedom(system)
     stock = openmm.VerletIntegrator(dt)
     stock.setConstraintTolerance(1e-10)
     runs = [Run("stock VerletIntegrator + SETTLE", system, state, stock, platform)]
@@ -118,7 +129,7 @@ def main():
         if not np.all(np.isfinite(energies)):
             print(f"{run.name:<34}{'unstable (NaN)':>30}")
             continue
-        drift, fluctuation = openmmrigid.testing.energyDrift(run.times, energies, dof)
+        drift, fluctuation = energyDrift(run.times, energies, dof)
         msPerStep = 1000*sum(run.roundSeconds)/steps
         ratio = np.median(np.array(run.roundSeconds)/stockSeconds)
         print(f"{run.name:<34}{drift:>+17.4f}{fluctuation:>13.3f}{msPerStep:>9.2f}{ratio:>14.3f}")

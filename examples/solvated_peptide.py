@@ -28,7 +28,7 @@ import openmm
 from openmm import app, unit
 
 import openmmrigid
-from openmmrigid import testing
+from _molecules import bodyKinds, degreesOfFreedom, energyDrift, sampleNVE
 
 # Heavy atoms of Ace-Ala-Nme from internal coordinates: label, residue, atom name, element, the
 # labels of the atoms it is bonded to / makes its angle with / its torsion with, the bond length (nm),
@@ -95,9 +95,11 @@ def buildSolvatedPeptide(edge, platform):
     # which may be a GPU platform whose minimizer fails, as OpenCL's on PoCL does).
     modeller.addHydrogens(forceField, platform=platform)
     solute = list(range(modeller.topology.getNumAtoms()))  # the peptide comes first, the waters after it
-    topology, positions, system = testing.waterBox("tip4pew", edge=edge, forceField=forceField, solute=modeller,
-                                                   constraints=app.HBonds)
-    return topology, positions, system, solute
+    modeller.addSolvent(forceField, model="tip4pew", boxSize=openmm.Vec3(edge, edge, edge)*unit.nanometer)
+    system = forceField.createSystem(modeller.topology, nonbondedMethod=app.PME,
+                                     nonbondedCutoff=min(0.9, 0.45*edge)*unit.nanometer, constraints=app.HBonds,
+                                     rigidWater=True, ewaldErrorTolerance=5e-4)
+    return modeller.topology, modeller.positions, system, solute
 
 
 def equilibratedState(positions, system, platform, picoseconds):
@@ -126,13 +128,15 @@ def constraintViolations(system, positions, solute):
     return worst["solute"], worst["water"]
 
 
-def describeBodies(integrator, system):
-    """Bodies, massive particles in no body, and virtual sites, as the integrator sees them."""
-    inBodies = sum(len(integrator.getBodyParticles(b)) for b in range(integrator.getNumBodies()))
+def describeBodies(integrator, system, positions):
+    """Bodies (their kinds from their masses and positions), massive particles in no body, and virtual
+    sites, as the integrator sees them."""
+    bodies = [integrator.getBodyParticles(b) for b in range(integrator.getNumBodies())]
+    inBodies = sum(len(body) for body in bodies)
     massive = sum(1 for i in range(system.getNumParticles()) if system.getParticleMass(i) > 0*unit.dalton)
     virtual = sum(1 for i in range(system.getNumParticles()) if system.isVirtualSite(i))
-    kinds = {integrator.getBodyKind(b) for b in range(integrator.getNumBodies())}
-    return integrator.getNumBodies(), "/".join(sorted(kinds)), massive - inBodies, virtual
+    kinds = set(bodyKinds(system, positions, bodies))
+    return len(bodies), "/".join(sorted(kinds)), massive - inBodies, virtual
 
 
 def main():
@@ -157,6 +161,7 @@ def main():
     stock = openmm.VerletIntegrator(dt)
     rigid = openmmrigid.RigidBodyIntegrator(dt)
     steps = int(round(args.time/(args.step*1e-3)))
+    dof = degreesOfFreedom(system)  # rigid waters (by their constraints) and the peptide's atoms less its constraints
     results = []
     for name, integrator in (("stock VerletIntegrator + SETTLE", stock), ("RigidBodyIntegrator (Exact)", rigid)):
         integrator.setConstraintTolerance(1e-10)
@@ -165,11 +170,11 @@ def main():
         context.applyConstraints(1e-10)  # both start from the same state, its constraints tightened
         context.applyVelocityConstraints(1e-10)
         if integrator is rigid:
-            bodies, kinds, free, virtual = describeBodies(rigid, system)
-            dof = rigid.getNumDegreesOfFreedom()
+            start = context.getState(getPositions=True).getPositions(asNumpy=True).value_in_unit(unit.nanometer)
+            bodies, kinds, free, virtual = describeBodies(rigid, system, start)
             print(f"RigidBodyIntegrator: {bodies} rigid bodies ({kinds}), {free} free particles, {virtual} virtual sites; "
-                  f"{dof} degrees of freedom (OpenMM's count for the System: {testing.degreesOfFreedom(system)})")
-        run = testing.sampleNVE(context, integrator, steps, max(1, steps//200))
+                  f"{dof} degrees of freedom")
+        run = sampleNVE(context, integrator, steps, max(1, steps//200))
         positions = context.getState(getPositions=True).getPositions(asNumpy=True).value_in_unit(unit.nanometer)
         results.append((name, run, *constraintViolations(system, positions, solute)))
         del context
@@ -182,7 +187,7 @@ def main():
         if not np.all(np.isfinite(run.energies)):
             print(f"{name:<34}{'unstable (NaN)':>14}")
             continue
-        drift, fluctuation = testing.energyDrift(run.times, run.energies, dof)
+        drift, fluctuation = energyDrift(run.times, run.energies, dof)
         print(f"{name:<34}{drift:>+14.4f}{fluctuation:>13.3f}{soluteViolation:>20.1e}{waterViolation:>16.1e}"
               f"{run.secondsPerStep*1e3:>9.2f}")
     print("drift: slope of a linear fit of the total energy per degree of freedom; fluctuation: standard deviation "
