@@ -2,7 +2,7 @@
 """The accuracy check (setAccuracyCheck(), on by default) on the runs of issue 23's table: which fire,
 after how many ps, and which stay quiet, with the figure of every 2 ps window.
 
-System: rigid water (openmmrigid.testing.waterBox: TIP3P unless --model, PME 0.9 nm), minimized and
+System: rigid water (rigidtesting.waterBox: TIP3P unless --model, PME 0.9 nm), minimized and
 equilibrated 5 ps with LangevinMiddleIntegrator + SETTLE at 2 fs and 300 K; every run starts from that
 state. Each run measures its shadow work (setMeasureShadowWork) and reads it every 0.05 ps, with the
 kinetic energy: the figure of each 2 ps window is computed here from those samples (the heating
@@ -10,7 +10,7 @@ kinetic energy: the figure of each 2 ps window is computed here from those sampl
 the kinetic energy's otherwise), next to the time the integrator's own check fired (None: quiet).
 
 Runs (name: integrator, step): L<dt>f<friction>: RigidBodyLangevinIntegrator; BV<dt>, BO<dt>:
-RigidBodyIntegrator with the Bussi thermostat (tau 1 ps), Verlet or Omelyan2; NVE<dt>, NVEO<dt>:
+RigidBodyBussiIntegrator (tau 1 ps), Verlet or Omelyan2; NVE<dt>, NVEO<dt>: RigidBodyIntegrator,
 without a thermostat. A suffix m<k> raises every moment of inertia to at least k/100 amu nm^2
 (setMinimumMomentOfInertia): L14f1m4 is Langevin at 14 fs, friction 1/ps, moments of at least 0.04.
 
@@ -21,8 +21,8 @@ without a thermostat. A suffix m<k> raises every moment of inertia to at least k
 
 --cost measures what the check's episodes cost instead (docs/results/accuracy_check_cost.md): 2000
 TIP4P-Ew waters (PME 0.9 nm, Ewald tolerance 5e-4), minimized and equilibrated 1 ps with
-LangevinMiddleIntegrator; RigidBodyLangevinIntegrator (300 K, 1/ps) and RigidBodyIntegrator with the
-Bussi thermostat (Verlet, tau 1 ps), both at 2 fs, each as three Contexts from that state: the check off,
+LangevinMiddleIntegrator; RigidBodyLangevinIntegrator (300 K, 1/ps) and RigidBodyBussiIntegrator
+(Verlet, tau 1 ps), both at 2 fs, each as three Contexts from that state: the check off,
 the check on (the default; every timed step lies in the first episode, the first 4 ps of a Context),
 and the check off with setMeasureShadowWork(True), which evaluates the energy at every step as the
 episodes did before they read samples. Stock LangevinMiddleIntegrator for scale. Blocks of --block
@@ -34,6 +34,8 @@ process's CPU time.
     python benchmarks/accuracy_check.py --cost            # about 5 minutes (one thread)
 """
 
+import sys
+import os
 import argparse
 import re
 import time
@@ -46,7 +48,8 @@ from openmm import unit
 import benchmarking
 from benchmarking import say, stamp
 import openmmrigid
-from openmmrigid.testing import waterBox
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, "tests", "python"))  # rigidtesting
+from rigidtesting import waterBox
 
 KJ = unit.kilojoule_per_mole
 R = unit.MOLAR_GAS_CONSTANT_R.value_in_unit(KJ/unit.kelvin)
@@ -62,10 +65,9 @@ def makeIntegrator(name):
     if kind == "L":
         integrator = openmmrigid.RigidBodyLangevinIntegrator(300, float(friction or 1), step)
     else:
-        integrator = openmmrigid.RigidBodyIntegrator(step)
+        integrator = (openmmrigid.RigidBodyBussiIntegrator(300, 1.0, step) if kind in ("BV", "BO") else
+                      openmmrigid.RigidBodyIntegrator(step))
         integrator.setSplitting(openmmrigid.RigidBodyIntegrator.Omelyan2 if kind in ("BO", "NVEO") else openmmrigid.RigidBodyIntegrator.Verlet)
-        if kind in ("BV", "BO"):
-            integrator.setThermostat(300, 1.0)
     if minimum:
         integrator.setMinimumMomentOfInertia(float(minimum)*0.01)
     return integrator
@@ -80,17 +82,17 @@ def run(name, system, state, platform, properties, picoseconds, every=0.05):
         # the equilibrated velocities keep their angular velocity: I'/I times too hot in rotation
         context.setVelocitiesToTemperature(300, 1)
     integrator.setMeasureShadowWork(True)
-    dof = integrator.getNumDegreesOfFreedom()
+    dof = benchmarking.rigidDegreesOfFreedom(context, integrator)
     n = max(1, int(round(every/dt)))
     rows, fired, failure = [], None, ""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", openmmrigid.AccuracyWarning)
+    with warnings.catch_warnings(record=True) as caught:  # recorded, not shown
+        warnings.simplefilter("always", openmmrigid.AccuracyWarning)
         try:
             for i in range(int(round(picoseconds/dt/n))):
                 integrator.step(n)
                 kinetic = context.getState(getEnergy=True).getKineticEnergy().value_in_unit(KJ)
                 rows.append(((i + 1)*n*dt, integrator.getShadowWork().value_in_unit(KJ), kinetic))
-                if fired is None and integrator.getAccuracyWarning():
+                if fired is None and benchmarking.accuracyWarnings(caught):
                     fired = (i + 1)*n*dt
         except openmm.OpenMMException as error:
             failure = f"unstable at {len(rows)*n*dt:.1f} ps"
@@ -106,9 +108,10 @@ def run(name, system, state, platform, properties, picoseconds, every=0.05):
         else:
             figures.append((w - np.polyval(fit, t)).std()/K.std())
     temperature = 2*kinetic[len(kinetic)//5:].mean()/(dof*R)
+    messages = benchmarking.accuracyWarnings(caught)
     return dict(run=name, temperature=float(temperature), fired=fired, failure=failure,
                 low=float(min(figures)) if figures else np.nan, high=float(max(figures)) if figures else np.nan,
-                kind="heating" if friction > 0 else "fluctuation", message=integrator.getAccuracyWarning())
+                kind="heating" if friction > 0 else "fluctuation", message=messages[-1] if messages else "")
 
 
 def measureCost(args):
@@ -134,8 +137,7 @@ def measureCost(args):
         if kind == "Langevin":
             integrator = openmmrigid.RigidBodyLangevinIntegrator(300, 1, 0.002)
         else:
-            integrator = openmmrigid.RigidBodyIntegrator(0.002)
-            integrator.setThermostat(300, 1.0)
+            integrator = openmmrigid.RigidBodyBussiIntegrator(300, 1.0, 0.002)
         integrator.setAccuracyCheck(mode == "check on")
         integrator.setMeasureShadowWork(mode == "energy every step")
         return integrator

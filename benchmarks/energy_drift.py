@@ -1,7 +1,7 @@
 #!/usr/bin/env python
 """Energy conservation of RigidBodyIntegrator against stock Verlet + SETTLE, over step sizes (NVE).
 
-Rigid-water boxes of 500 molecules (openmmrigid.testing.waterBox: openmm.app, PME with a 0.9 nm
+Rigid-water boxes of 500 molecules (rigidtesting.waterBox: openmm.app, PME with a 0.9 nm
 cutoff and Ewald error tolerance 5e-4, rigidWater=True, the force field's CMMotionRemover) of
 TIP3P, SPC/E, TIP4P-Ew and, on request, TIP5P are each minimized and equilibrated once with a stock
 LangevinMiddleIntegrator at 300 K (5/ps, 2 fs, SETTLE; on the CPU platform with one thread and
@@ -30,7 +30,8 @@ it) and reports:
 - T_trans, T_rot: translational and rotational temperatures by equipartition (3N - 3 and 3N
   degrees of freedom), computed for every method by the same function from positions, velocities
   and masses (stock Verlet's leapfrog velocities moved on by half a step first), checked against
-  the rigid integrators' own kinetic energies;
+  the State's kinetic energy and, for the rigid integrators, against the split of their own bodies
+  (benchmarking.rigidKineticEnergies with the integrator's bodies and moments);
 - cost: wall time of the step() calls alone, as ms/step, ns/day and seconds per simulated ps.
 
     python benchmarks/energy_drift.py --quick        # a smoke check: TIP3P + TIP4P-Ew, 2/4/6 fs, 1.5 ps per run
@@ -51,6 +52,7 @@ benchmarks/results/) with its figures <name>_drift.png, <name>_fluctuation.png a
 <output>_equal_accuracy.csv and <output>.log. Measured results: docs/results/energy_drift.md.
 """
 
+import sys
 import argparse
 import dataclasses
 import datetime
@@ -66,11 +68,14 @@ import openmm
 from openmm import unit
 
 import openmmrigid
-from benchmarking import (RESULTS, Progress, ResultsDocument, cpuProperties, header, openLog, pyplot, say, saveFigure,
-                          slopeError, stamp, writeCsv)
+from benchmarking import (RESULTS, Progress, ResultsDocument, cpuProperties, forceEvaluations, header,
+                          integratorBodies, openLog, pyplot, rigidDegreesOfFreedom, rigidKineticEnergies as
+                          bodyKineticEnergies, say, saveFigure, slopeError, stamp, writeCsv)
 
 plt = pyplot()
 import matplotlib.ticker  # noqa: E402 (after pyplot() chose the backend)
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, "tests", "python"))  # rigidtesting
+import rigidtesting
 
 TEMPERATURE = 300.0  # K
 BOLTZMANN = (unit.BOLTZMANN_CONSTANT_kB*unit.AVOGADRO_CONSTANT_NA).value_in_unit(unit.kilojoule_per_mole/unit.kelvin)
@@ -131,11 +136,11 @@ def rigidBody(rotationMethod, splitting=openmmrigid.RigidBodyIntegrator.Verlet):
 
 
 def rigidBodyScheme(name, colour, marker):
-    """The exact rotation with the splitting `name`; its force evaluations per step as the integrator counts them."""
+    """The exact rotation with the splitting `name`; its force evaluations per step (benchmarking.forceEvaluations)."""
     splitting = getattr(openmmrigid.RigidBodyIntegrator, name)
     integrator = openmmrigid.RigidBodyIntegrator(0.001)
     integrator.setSplitting(splitting)
-    return Method(f"RigidBodyIntegrator (Exact, {name})", colour, marker, integrator.getNumForceEvaluations(),
+    return Method(f"RigidBodyIntegrator (Exact, {name})", colour, marker, forceEvaluations(integrator),
                   rigidBody(openmmrigid.RigidBodyIntegrator.Exact, splitting))
 
 
@@ -207,10 +212,10 @@ class Box:
 
 
 def buildBox(key, molecules, ewaldTolerance):
-    topology, positions, system = openmmrigid.testing.waterBox(
+    topology, positions, system = rigidtesting.waterBox(
         key, molecules=molecules, forceField=MODELS[key].forceField, nonbondedCutoff=CUTOFF*unit.nanometer,
         ewaldErrorTolerance=ewaldTolerance)
-    masses = openmmrigid.testing.particleMasses(system)
+    masses = rigidtesting.particleMasses(system)
     bodies = np.array([[atom.index for atom in residue.atoms() if masses[atom.index] > 0]
                        for residue in topology.residues()])
     removesMotion = any(isinstance(system.getForce(i), openmm.CMMotionRemover) for i in range(system.getNumForces()))
@@ -289,7 +294,9 @@ class Trace:
     translational: list = dataclasses.field(default_factory=list)  # kJ/mol
     rotational: list = dataclasses.field(default_factory=list)  # kJ/mol
     stateMismatch: float = 0.0  # largest relative difference of our kinetic energy from the State's
-    integratorMismatch: float = float("nan")  # the same for the rigid integrators' own trans./rot. values
+    integratorMismatch: float = float("nan")  # the same for the trans./rot. split of the rigid integrators' bodies
+    bodies: list = None  # the rigid integrator's bodies (benchmarking.integratorBodies), None for stock
+    minimumMoment: float = 0.0  # and its minimum moment of inertia (amu nm^2)
     blowup: float = None  # ps
     reason: str = ""
     stepSeconds: float = 0.0
@@ -310,9 +317,9 @@ def record(trace, state, time_, box, method, integrator, stepFs):
         velocities = state.getVelocities(asNumpy=True).value_in_unit(unit.nanometer/unit.picosecond)
     kinetic = rigidKineticEnergies(positions, velocities, box.masses, box.bodies)
     trace.stateMismatch = max(trace.stateMismatch, abs(sum(kinetic)/state.getKineticEnergy().value_in_unit(KJ) - 1))
-    if hasattr(integrator, "getRotationalKineticEnergy"):
-        reported = (integrator.getTranslationalKineticEnergy().value_in_unit(KJ),
-                    integrator.getRotationalKineticEnergy().value_in_unit(KJ))
+    if trace.bodies is not None:
+        reported = bodyKineticEnergies(positions, velocities, box.masses, trace.bodies, trace.minimumMoment,
+                                       state.getPeriodicBoxVectors(asNumpy=True).value_in_unit(unit.nanometer))
         worst = max(abs(ours/theirs - 1) for ours, theirs in zip(kinetic, reported))
         trace.integratorMismatch = worst if math.isnan(trace.integratorMismatch) else max(trace.integratorMismatch, worst)
     trace.times.append(time_)
@@ -329,11 +336,15 @@ def runNVE(box, name, stepFs, args, platform, properties):
     context = openmm.Context(box.system, integrator, platform, properties)
     context.setState(box.state)
     method.prepare(context)
-    if hasattr(integrator, "getNumDegreesOfFreedom") and integrator.getNumDegreesOfFreedom() != box.dof:
-        say(f"  WARNING: {name} counts {integrator.getNumDegreesOfFreedom()} degrees of freedom, this script {box.dof}")
+    trace = Trace()
+    if isinstance(integrator, openmmrigid.RigidBodyIntegratorBase):
+        trace.bodies = integratorBodies(integrator)
+        trace.minimumMoment = integrator.getMinimumMomentOfInertia().value_in_unit(unit.dalton*unit.nanometer**2)
+        counted = rigidDegreesOfFreedom(context, integrator)
+        if counted != box.dof:
+            say(f"  WARNING: {name}'s bodies have {counted} degrees of freedom, this script counts {box.dof}")
     threads = platform.getPropertyValue(context, "Threads") if platform.getName() == "CPU" else ""
     every, samples = sampling(stepFs, args)
-    trace = Trace()
     progress = Progress(f"{MODELS[box.key].label} {name} {stepFs:g} fs", samples)
     for sample in range(samples + 1):
         time_ = sample*every*stepFs/1000
@@ -366,7 +377,7 @@ def summarize(box, name, stepFs, every, args, trace, threads):
     times, energies = np.array(trace.times), np.array(trace.energies)
     drift = fluctuation = driftError = nan
     if len(times) >= 3:
-        drift, fluctuation = openmmrigid.testing.energyDrift(times, energies, box.dof)
+        drift, fluctuation = rigidtesting.energyDrift(times, energies, box.dof)
         driftError = slopeError(times, energies, DRIFT_BLOCKS)*1000/box.dof
     msPerStep = 1000*trace.stepSeconds/trace.timedSteps if trace.timedSteps else nan
     nsPerDay = stepFs*1e-6/(msPerStep/1000)*86400

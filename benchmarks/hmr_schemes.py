@@ -36,6 +36,7 @@ benchmarks/results/), and <output>.csv and <output>.log (a copy of what is print
 
 import argparse
 import os
+import sys
 import time
 from pathlib import Path
 
@@ -44,7 +45,10 @@ import openmm
 from openmm import app, unit
 
 import openmmrigid
-from benchmarking import RESULTS, ResultsDocument, cpuProperties, header, openLog, say, stamp, writeCsv
+from benchmarking import (RESULTS, ResultsDocument, cpuProperties, header, openLog, rigidDegreesOfFreedom, say, stamp,
+                          writeCsv)
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, "tests", "python"))  # rigidtesting
+import rigidtesting
 
 SAMPLE_FS = 48  # a multiple of 4, 6 and 8 fs
 CONSTRAINT_TOLERANCE = 1e-10
@@ -165,7 +169,7 @@ def summarize(run, dof, stockFluctuation):
     row = {"method": run.label, "scheme": run.scheme, "step_fs": run.stepFs, "simulated_ps": times[-1] - times[0],
            "failure": run.failure}
     if len(times) >= 3:
-        drift, fluctuation = openmmrigid.testing.energyDrift(times, energies, dof)
+        drift, fluctuation = rigidtesting.energyDrift(times, energies, dof)
         row.update(drift_kj_per_mol_ns_dof=drift, fluctuation_kj_per_mol=fluctuation)
         if stockFluctuation:
             row["fluctuation_to_stock"] = fluctuation/stockFluctuation
@@ -211,7 +215,7 @@ def main():
         say(line)
     started = time.perf_counter()
     pdb, system = buildSystem(args)
-    dof = openmmrigid.testing.degreesOfFreedom(system)
+    dof = rigidtesting.degreesOfFreedom(system)
     waters = sum(1 for residue in pdb.topology.residues() if residue.name == "HOH")
     with document.capture():
         say(f"system: {os.path.basename(args.pdb)}: {system.getNumParticles()} atoms, {waters} waters, hydrogen mass "
@@ -220,9 +224,10 @@ def main():
     stamp(f"minimizing, then {args.equilibrate:g} ps of LangevinMiddleIntegrator at 4 fs")
     state = equilibrate(pdb, system, platform, properties, args)
     runs = makeRuns(system, state, platform, properties, args)
-    rigid = runs[len(args.stock_steps)].integrator
+    rigid = runs[len(args.stock_steps)]
     stamp(f"{len(runs)} runs of {args.time:g} ps, round-robin in {SAMPLE_FS} fs pieces; RigidBodyIntegrator: "
-          f"{rigid.getNumBodies()} bodies, {rigid.getNumDegreesOfFreedom()} degrees of freedom")
+          f"{rigid.integrator.getNumBodies()} bodies, {rigidDegreesOfFreedom(rigid.context, rigid.integrator)} "
+          "degrees of freedom")
     active = list(runs)
     pieces = int(round(args.time*1000/SAMPLE_FS))
     for piece in range(pieces):

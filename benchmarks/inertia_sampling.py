@@ -73,7 +73,7 @@ from openmm import app, unit
 
 import openmmrigid
 from benchmarking import (ROOT, RESULTS as BENCHMARK_RESULTS, Progress, ResultsDocument, SampleStore, blockMean, cpuProperties, runWorkers, header,
-                          nsPerDay, openLog, pyplot, say, stamp, timeInterleaved, TimingFailure)
+                          nsPerDay, openLog, pyplot, rigidDegreesOfFreedom, say, stamp, timeInterleaved, TimingFailure)
 from nvt_accuracy import (AMU_PER_NM3_IN_G_PER_ML, BOLTZMANN, FRICTION, SYSTEMS as NVT_SYSTEMS, TEMPERATURE, buildModel,
                           equilibrate, stockDegreesOfFreedom, withoutBarostat)
 
@@ -192,7 +192,7 @@ def simulate(models, state, waters, spec, stepFs, seed, npt, discard, production
     # Fresh velocities for this configuration's masses and moments: those of the start, drawn for the
     # particles' own, would give raised moments a rotational temperature I'/I times too high.
     context.setVelocitiesToTemperature(TEMPERATURE, seed)
-    dof = integrator.getNumDegreesOfFreedom() if spec[1] else stockDegreesOfFreedom(system)
+    dof = rigidDegreesOfFreedom(context, integrator) if spec[1] else stockDegreesOfFreedom(system)
     totalMass = sum(system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles()))
     dtPs = stepFs/1000
     perSample = max(1, int(round(SAMPLE_EVERY/dtPs)))

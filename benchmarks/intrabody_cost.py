@@ -34,6 +34,7 @@ Writes docs/results/<name>.md (the name of --output, default intrabody_cost; a q
 benchmarks/results/), and <output>.csv and <output>.log (a copy of what is printed).
 """
 
+import sys
 import argparse
 import os
 import statistics
@@ -46,6 +47,8 @@ from openmm import app, unit
 
 import openmmrigid
 from benchmarking import RESULTS, ResultsDocument, header, openLog, say, stamp, writeCsv
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, "tests", "python"))  # rigidtesting
+import rigidtesting
 
 KJ = unit.kilojoule_per_mole
 RINGS = {"PHE": "CG|CD[12]|CE[12]|CZ|HD[12]|HE[12]|HZ",
@@ -55,7 +58,7 @@ RINGS = {"PHE": "CG|CD[12]|CE[12]|CZ|HD[12]|HE[12]|HZ",
 
 
 def dipeptideBox(args):
-    pdb = openmmrigid.testing.alanineDipeptide()
+    pdb = rigidtesting.alanineDipeptide()
     local = np.array(pdb.positions.value_in_unit(unit.nanometer))
     local -= local.mean(axis=0)
     perSide = int(np.ceil(args.molecules**(1/3)))
@@ -65,7 +68,7 @@ def dipeptideBox(args):
     modeller = app.Modeller(app.Topology(), [])
     for index in range(args.molecules):
         site = spacing*(np.array(np.unravel_index(index, (perSide,)*3)) + 0.5)
-        modeller.add(pdb.topology, (local @ openmmrigid.testing.randomRotation(rng).T + site)*unit.nanometer)
+        modeller.add(pdb.topology, (local @ rigidtesting.randomRotation(rng).T + site)*unit.nanometer)
     edge = spacing*perSide
     modeller.topology.setPeriodicBoxVectors(np.eye(3)*edge*unit.nanometer)
     forceField = app.ForceField("amber14-all.xml")

@@ -27,6 +27,8 @@ which is what this measures. Stronger friction pulls it back towards the bath's.
 Writes docs/results/langevin_axes.md (a quick run: benchmarks/results/) and a figure.
 """
 
+import sys
+import os
 import argparse
 import time
 
@@ -35,7 +37,8 @@ import openmm
 from openmm import unit
 
 import openmmrigid
-import openmmrigid.testing
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, "tests", "python"))  # rigidtesting
+import rigidtesting
 from benchmarking import (RESULTS, blockMean, openRun, principalKineticEnergies, pyplot, saveFigure, say, stamp,
                           writeCsv)
 
@@ -45,7 +48,7 @@ KINDS = {"exact": "RigidBodyLangevinIntegrator (Exact)", "stock": "LangevinMiddl
 
 
 def equilibratedBox(model, waters, platform, properties):
-    topology, positions, system = openmmrigid.testing.waterBox(model, molecules=waters)
+    topology, positions, system = rigidtesting.waterBox(model, molecules=waters)
     integrator = openmm.LangevinMiddleIntegrator(TEMPERATURE, 1.0, 0.002)
     integrator.setRandomNumberSeed(3)
     context = openmm.Context(system, integrator, platform, properties)
@@ -73,7 +76,7 @@ def run(system, state, molecules, masses, kind, friction, stepFs, production, pl
     context.setState(state)
     steps = lambda ps: int(round(ps*1000/stepFs))
     count = len(molecules)
-    dof = openmmrigid.testing.degreesOfFreedom(system)
+    dof = rigidtesting.degreesOfFreedom(system)
     samples = []
     integrator.step(steps(2.0))
     for _ in range(max(20, steps(production)//10)):
@@ -160,7 +163,7 @@ def main():
     for model in args.models:
         stamp(f"{model}: building and equilibrating {args.waters} waters")
         system, state = equilibratedBox(model, args.waters, platform, properties)
-        masses = openmmrigid.testing.particleMasses(system)
+        masses = rigidtesting.particleMasses(system)
         molecules = np.flatnonzero(masses > 0).reshape(-1, 3)
         for friction in args.frictions:
             for stepFs in args.steps:

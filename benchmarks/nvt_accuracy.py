@@ -8,7 +8,7 @@ every 25 steps):
 
 - tip3p-nvt, tip3p-npt: 500 rigid TIP3P waters;
 - tip4pew-nvt, tip4pew-npt: 500 rigid TIP4P-Ew waters;
-- protein: alanine dipeptide (amber14-all, openmmrigid.testing.alanineDipeptide()) in 500 rigid TIP3P
+- protein: alanine dipeptide (amber14-all, rigidtesting.alanineDipeptide()) in 500 rigid TIP3P
   waters, NPT, constraints=HBonds, hydrogenMass=3 amu. RigidBodyLangevinIntegrator moves the waters
   as rigid bodies and the peptide as free atoms with its bonds to hydrogen constrained.
 
@@ -23,7 +23,8 @@ thrown away, then `--time` ps sampled every 0.1 ps:
 - the temperature each integrator reports, 2 KE / (dof R) with the State's kinetic energy and the
   integrator's degrees of freedom: for LangevinMiddleIntegrator counted as app.StateDataReporter
   counts them (3 per massive particle, less the constraints, less 3 for the CMMotionRemover), for
-  RigidBodyLangevinIntegrator its getNumDegreesOfFreedom(), as RigidStateDataReporter does;
+  RigidBodyLangevinIntegrator those of its bodies and free particles (benchmarking.rigidDegreesOfFreedom:
+  the count its computeSystemTemperature() uses);
 - every 0.2 ps the water oxygens, for g_OO(r) (minimum image in the cubic box, 0.005 nm bins).
 
 Errors are standard errors of the mean from block means: the larger of the 5-block and 10-block
@@ -68,7 +69,8 @@ from openmm import app, unit
 
 import openmmrigid
 from benchmarking import (RESULTS as BENCHMARK_RESULTS, ROOT, Progress, ResultsDocument, blockMean, commit, command,
-                          machine, nsPerDay, openLog, pyplot, radialDistribution, say, stamp)
+                          machine, nsPerDay, openLog, pyplot, radialDistribution, rigidDegreesOfFreedom, say, stamp)
+import rigidtesting  # tests/python, on the path benchmarking sets
 
 RESULTS = BENCHMARK_RESULTS/"nvt_accuracy"
 
@@ -107,9 +109,9 @@ INTEGRATORS = {"stock": "LangevinMiddleIntegrator + SETTLE", "exact": "RigidBody
 def buildModel(model, protein):
     """Topology, positions and the NPT System of one model (the barostat is the last force)."""
     options = dict(constraints=app.HBonds, hydrogenMass=3*unit.amu) if protein else dict(constraints=None)
-    topology, positions, system = openmmrigid.testing.waterBox(
+    topology, positions, system = rigidtesting.waterBox(
         model, molecules=MOLECULES, forceField=["amber14-all.xml", f"amber14/{model}.xml"],
-        solute=openmmrigid.testing.alanineDipeptide() if protein else None, **options)
+        solute=rigidtesting.alanineDipeptide() if protein else None, **options)
     system.addForce(openmm.MonteCarloBarostat(PRESSURE, TEMPERATURE, BAROSTAT_INTERVAL))
     return topology, positions, system
 
@@ -185,7 +187,7 @@ def simulate(system, state, analysis, kind, stepFs, seed, npt, discard, producti
     """One run. Returns the samples (dict of lists), the oxygen frames and box edges, ms per step, and
     a failure message (empty if it finished)."""
     context, integrator = makeContext(system, state, kind, stepFs, seed, platform, properties, npt)
-    dof = integrator.getNumDegreesOfFreedom() if kind != "stock" else stockDegreesOfFreedom(system)
+    dof = rigidDegreesOfFreedom(context, integrator) if kind != "stock" else stockDegreesOfFreedom(system)
     dtPs = stepFs/1000
     perSample = max(1, int(round(SAMPLE_EVERY/dtPs)))
     samples = max(10, int(round(production/(perSample*dtPs))))

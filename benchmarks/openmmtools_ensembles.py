@@ -7,10 +7,10 @@ reaction field with a 0.6 nm cutoff, no CMMotionRemover) minimized and equilibra
 LangevinMiddleIntegrator + SETTLE:
 
 1. AndersenThermostat (5/ps, put in the System beforehand so that openmmtools keeps it; its own is 1/ps),
-   which openmmtools keeps in (or adds to) the System of an integrator it sees as unthermostated (RigidBodyIntegrator without a thermostat; stock VerletIntegrator): bodies found
+   which openmmtools keeps in (or adds to) the System of an integrator it sees as unthermostated (RigidBodyIntegrator; stock VerletIntegrator): bodies found
    from the constraints, explicit bodies that keep their constraints, explicit bodies without them
    (removeIntraBodyInteractions), stock Verlet + SETTLE.
-2. RigidBodyIntegrator with its Bussi thermostat, created at 300 K and moved to 330 K by
+2. RigidBodyBussiIntegrator, created at 300 K and moved to 330 K by
    apply_to_context (whether openmmtools added an AndersenThermostat, what the integrator's
    temperature is, what the run reads); stock LangevinMiddleIntegrator the same way.
 3. CompoundIntegrator[RigidBodyLangevinIntegrator, Verlet] the same way; stock
@@ -88,15 +88,17 @@ def andersens(system):
 
 
 def thermostatedRun(name, make, getTemperature, system, state, dof, picoseconds, platform, properties):
-    """create_context at 300 K, apply_to_context at 330 K, run: a row of the table."""
+    """create_context at 300 K, apply_to_context at 330 K, run: a row of the table. The integrator's
+    temperature is read from our own reference to it (and to the one in a CompoundIntegrator):
+    Context.getIntegrator() and CompoundIntegrator.getIntegrator() give a plain openmm.Integrator proxy
+    for the plugin's integrators."""
     cold = states.ThermodynamicState(system, 300 * unit.kelvin)
     hot = states.ThermodynamicState(system, 330 * unit.kelvin)
-    integrator = make()
+    integrator, inner = make()
     context = cold.create_context(integrator, platform, properties)
     hot.apply_to_context(context)
     context.setState(state)
-    integrator = context.getIntegrator()
-    seen = getTemperature(integrator)
+    seen = getTemperature(integrator, inner)
     measured = sampleTemperature(context, integrator, dof, picoseconds)
     return [name, str(andersens(context.getSystem())), f"{seen.value_in_unit(unit.kelvin):.0f}", formatTemperature(measured)]
 
@@ -173,32 +175,32 @@ def main():
 
     stamp("2-3. thermostated integrators: created at 300 K, applied at 330 K")
 
+    # Each make() returns (the integrator, the first of a CompoundIntegrator or None).
     def bussi():
-        integrator = openmmrigid.RigidBodyIntegrator(STEP)
-        integrator.setThermostat(300 * unit.kelvin, 0.1 * unit.picosecond)
-        return integrator
+        return openmmrigid.RigidBodyBussiIntegrator(300 * unit.kelvin, 0.1 * unit.picosecond, STEP), None
 
     def compound(first):
         def make():
             integrator = openmm.CompoundIntegrator()
-            integrator.addIntegrator(first())
+            inner, _ = first()
+            integrator.addIntegrator(inner)
             integrator.addIntegrator(openmm.VerletIntegrator(STEP))
-            return integrator
+            return integrator, inner
         return make
 
     def rigidLangevin():
-        return openmmrigid.RigidBodyLangevinIntegrator(300 * unit.kelvin, 1 / unit.picosecond, STEP)
+        return openmmrigid.RigidBodyLangevinIntegrator(300 * unit.kelvin, 1 / unit.picosecond, STEP), None
 
     def stockLangevin():
-        return openmm.LangevinMiddleIntegrator(300 * unit.kelvin, 1 / unit.picosecond, STEP)
+        return openmm.LangevinMiddleIntegrator(300 * unit.kelvin, 1 / unit.picosecond, STEP), None
 
-    def first(integrator):
-        return integrator.getIntegrator(0).getTemperature()
+    def first(integrator, inner):
+        return inner.getTemperature()
 
-    def own(integrator):
+    def own(integrator, inner):
         return integrator.getTemperature()
 
-    rows = [thermostatedRun("RigidBodyIntegrator + setThermostat (Bussi, 0.1 ps)", bussi, own, system, state, dof, args.time,
+    rows = [thermostatedRun("RigidBodyBussiIntegrator (0.1 ps)", bussi, own, system, state, dof, args.time,
                             platform, properties),
             thermostatedRun("stock LangevinMiddleIntegrator (1/ps)", stockLangevin, own, system, state, dof, args.time,
                             platform, properties),

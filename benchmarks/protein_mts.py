@@ -39,8 +39,8 @@ import openmm.app as app
 import openmm.unit as unit
 
 import openmmrigid
-from benchmarking import (RESULTS, blockMean, blockSteps, nsPerDay, openRun, pyplot, say, saveFigure, stamp, timeInterleaved,
-                          writeCsv)
+from benchmarking import (RESULTS, blockMean, blockSteps, nsPerDay, openRun, pyplot, rigidDegreesOfFreedom, say, saveFigure,
+                          stamp, timeInterleaved, writeCsv)
 
 TEMPERATURE, FRICTION = 300.0, 1.0
 BONDED = (openmm.HarmonicBondForce, openmm.HarmonicAngleForce, openmm.PeriodicTorsionForce, openmm.CMAPTorsionForce)
@@ -126,7 +126,7 @@ def run(config, stepFs, state, args, platform, properties, seed):
     context.setPositions(state.getPositions())
     context.setVelocitiesToTemperature(TEMPERATURE, seed)
     stride = max(1, int(round(100.0/stepFs)))
-    dof = (integrator.getNumDegreesOfFreedom() if not config.stock else
+    dof = (rigidDegreesOfFreedom(context, integrator) if not config.stock else
            3*system.getNumParticles() - system.getNumConstraints() - 3)
     samples = []
     try:

@@ -43,6 +43,8 @@ Writes docs/results/rotation_accuracy.md and docs/figures/rotation_accuracy.png 
 benchmarks/results/), and benchmarks/results/rotation_accuracy.csv.
 """
 
+import sys
+import os
 import argparse
 import datetime
 import time
@@ -53,8 +55,9 @@ from openmm import unit
 
 import openmmrigid
 
-from benchmarking import (RESULTS, ResultsDocument, blockSteps, cpuProperties, header, medianRange, pyplot, say,
-                          saveFigure, timeInterleaved, writeCsv)
+from benchmarking import (RESULTS, ResultsDocument, blockSteps, bodyKinds, cpuProperties, header, medianRange, pyplot,
+                          say, saveFigure, timeInterleaved, writeCsv)
+import rigidtesting  # tests/python, on the path benchmarking sets
 
 plt = pyplot()
 STEP = 2*unit.femtosecond
@@ -76,7 +79,7 @@ def randomBodies(count, seed):
     for row in moments:
         first, second = rng.uniform(0.005, 0.02, size=2)
         row[:] = sorted([first, second, rng.uniform(max(first, second), first + second)])
-    attitudes = np.array([openmmrigid.testing.randomRotation(rng) for _ in range(count)])
+    attitudes = np.array([rigidtesting.randomRotation(rng) for _ in range(count)])
     omegas = rng.normal(size=(count, 3))*np.sqrt(BOLTZMANN*TEMPERATURE/moments)
     return moments, attitudes, omegas
 
@@ -281,7 +284,7 @@ def measureCost(count, seed, seconds, repetitions):
         context.setVelocitiesToTemperature(TEMPERATURE*unit.kelvin, 7)
         integrators[name] = integrator
         contexts.append(context)
-    kinds = {integrators["Exact"].getBodyKind(b) for b in range(count)}
+    kinds = set(bodyKinds(contexts[0], integrators["Exact"]))  # from the bodies' positions (benchmarking.bodyKind)
     steps = blockSteps(integrators["Exact"], None, seconds, 10)
     wall, cpu = timeInterleaved(integrators, steps, repetitions)
     return ({name: medianRange(samples, 1e9/count) for name, samples in wall.items()},

@@ -31,6 +31,8 @@ Writes docs/results/step_cap.md and docs/figures/step_cap_<system>.png (a quick 
 and benchmarks/results/step_cap.csv.
 """
 
+import sys
+import os
 import argparse
 import collections
 import math
@@ -44,9 +46,10 @@ import openmm
 from openmm import unit
 
 import openmmrigid
-import openmmrigid.testing
-from benchmarking import (RESULTS, blockMean, openRun, principalKineticEnergies, pyplot, saveFigure, say, stamp,
-                          writeCsv)
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, "tests", "python"))  # rigidtesting
+import rigidtesting
+from benchmarking import (RESULTS, accuracyWarnings, blockMean, openRun, principalKineticEnergies, pyplot,
+                          rigidDegreesOfFreedom, saveFigure, say, stamp, writeCsv)
 import inertia_sampling
 from nvt_accuracy import BOLTZMANN, FRICTION, TEMPERATURE
 
@@ -92,10 +95,10 @@ def run(system, state, config, stepFs, seed, waters, args, platform, properties)
     context = openmm.Context(system, integrator, platform, properties)
     context.setState(state)
     context.setVelocitiesToTemperature(TEMPERATURE, seed)
-    masses = openmmrigid.testing.particleMasses(system)
+    masses = rigidtesting.particleMasses(system)
     molecules = np.flatnonzero(masses > 0).reshape(-1, 3)
     count = len(molecules)
-    dof = integrator.getNumDegreesOfFreedom() if config.rigid else openmmrigid.testing.degreesOfFreedom(system)
+    dof = rigidDegreesOfFreedom(context, integrator) if config.rigid else rigidtesting.degreesOfFreedom(system)
     every = max(1, int(round(SAMPLE_EVERY*1000/stepFs)))
     samples, failure = [], ""
     with warnings.catch_warnings(record=True) as caught:
@@ -117,7 +120,7 @@ def run(system, state, config, stepFs, seed, waters, args, platform, properties)
                                 2*(kinetic - translational)/(3*count*BOLTZMANN), potential])
         except openmm.OpenMMException as error:
             failure = textwrap.shorten(str(error).splitlines()[0], 100, placeholder=" ...")
-    warned = any(issubclass(w.category, openmmrigid.AccuracyWarning) for w in caught)
+    warned = bool(accuracyWarnings(caught))
     del context
     return (blockMean(np.array(samples)) if not failure else None), warned, failure
 

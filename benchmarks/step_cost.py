@@ -22,7 +22,8 @@ check off: with no forces its episodes' kinetic-energy sums are no longer within
 of such a step on one CPU thread), and a timing from a fresh Context is all episode (interleaved
 with stock VerletIntegrator on the same System, shown for scale only) and Exact/NoSquish. This
 includes the fixed cost of a step (the Python call, an empty force evaluation), spread over N bodies;
-the kinds the integrator found are checked and written to the CSV.
+the kinds of the integrator's bodies (benchmarking.bodyKind, from the moments of the positions given)
+are checked and written to the CSV.
 
 On the CPU platform both parts run with one thread and with its default thread count (property
 Threads); on a GPU platform in the one precision asked for (mixed by default, as OpenMM users run).
@@ -38,6 +39,7 @@ benchmarks/results/step_cost.md instead), and benchmarks/results/step_cost.csv, 
 (step_cost_OpenCL_mixed.md, ...).
 """
 
+import os
 import argparse
 import datetime
 import math
@@ -50,11 +52,13 @@ import openmm
 from openmm import unit
 
 import openmmrigid
-from benchmarking import (RESULTS, ResultsDocument, blockSteps, header, loadAverage, machine, medianRange, openLog, pyplot,
-                          say, saveFigure, stamp, timeInterleaved, writeCsv)
+from benchmarking import (RESULTS, ResultsDocument, blockSteps, bodyKinds, header, loadAverage, machine, medianRange, openLog,
+                          pyplot, say, saveFigure, stamp, timeInterleaved, writeCsv)
 
 plt = pyplot()
 import matplotlib.ticker  # noqa: E402 (after pyplot() chose the backend)
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, "tests", "python"))  # rigidtesting
+import rigidtesting
 
 STEP = 2*unit.femtosecond
 PLATFORM_NAME = ["CPU"]  # the platform timed, for the tables (set by main)
@@ -135,7 +139,7 @@ def parseArguments():
 # Part 1: water boxes with PME
 
 def buildBox(model, molecules):
-    return openmmrigid.testing.waterBox(model, molecules=molecules, nonbondedCutoff=CUTOFF, ewaldErrorTolerance=5e-4)
+    return rigidtesting.waterBox(model, molecules=molecules, nonbondedCutoff=CUTOFF, ewaldErrorTolerance=5e-4)
 
 
 def equilibratedState(positions, system, cpu, steps, iterations):
@@ -249,7 +253,7 @@ def waterGeometry():
     return [[0, 0, 0], [0.09572*math.sin(half), 0.09572*math.cos(half), 0], [-0.09572*math.sin(half), 0.09572*math.cos(half), 0]]
 
 
-# kind: (label, masses in amu, body-frame positions in nm, expected getBodyKind)
+# kind: (label, masses in amu, body-frame positions in nm, expected benchmarking.bodyKind)
 BODY_KINDS = {
     "water": ("water (TIP3P, asymmetric)", [15.999, 1.008, 1.008], waterGeometry(), "asymmetric"),
     "linear": ("linear (CO2, 3 particles)", [12.011, 15.999, 15.999], [[0, 0, 0], [0, 0, 0.1162], [0, 0, -0.1162]], "linear"),
@@ -263,9 +267,9 @@ def bodySystem(kind, count, seed=1):
     """A System of `count` randomly oriented bodies of one kind, all centred at the origin, no forces.
 
     Water gets its three constraints (the integrator finds the bodies); the other kinds are explicit.
-    The centres are all at the origin (nothing interacts, so overlap costs nothing) because an explicit
-    body's kind comes from the moments of its initial coordinates with a tolerance of 8 ulps of the
-    largest moment: at lattice sites a few nm out, the rounding of centre + offset makes about 60 %
+    The centres are all at the origin (nothing interacts, so overlap costs nothing) because the integrator
+    takes an explicit body's kind from the moments of its initial coordinates with a tolerance of 8 ulps
+    of the largest moment: at lattice sites a few nm out, the rounding of centre + offset makes about 60 %
     of tetrahedra and NH3 pyramids "asymmetric" or "symmetric" instead.
     """
     _, masses, local, _ = BODY_KINDS[kind]
@@ -274,7 +278,7 @@ def bodySystem(kind, count, seed=1):
     system, positions, bodies = openmm.System(), [], []
     rng = np.random.default_rng(seed)
     for index in range(count):
-        rotation = openmmrigid.testing.randomRotation(rng)
+        rotation = rigidtesting.randomRotation(rng)
         body = [system.addParticle(mass) for mass in masses]
         positions.extend(openmm.Vec3(*(rotation@r)) for r in local)
         bodies.append(body)
@@ -297,11 +301,11 @@ def rigidIntegrator(bodies, method):
     return integrator
 
 
-def foundKinds(integrator, expected, kind):
-    """'kind:count;...' of the integrator's bodies, with a warning when under 99 % are `expected`."""
+def foundKinds(context, integrator, positions, expected, kind):
+    """'kind:count;...' of the integrator's bodies (benchmarking.bodyKinds, from the positions the Context
+    was given), with a warning when under 99 % are `expected`."""
     found = {}
-    for index in range(integrator.getNumBodies()):
-        name = integrator.getBodyKind(index)
+    for name in bodyKinds(context, integrator, positions):
         found[name] = found.get(name, 0) + 1
     if found.get(expected, 0) < 0.99*integrator.getNumBodies():
         say(f"  WARNING: {kind} bodies classified as {found}, expected {expected!r}")
@@ -322,7 +326,8 @@ def measureKind(kind, cpu, threads, args):
     actualThreads = threadsOf(cpu, contexts[0])
     steps = blockSteps(integrators["Exact"], args.body_steps, args.seconds/2, 10)  # steadier than the boxes
     times, _ = timeInterleaved(integrators, steps, args.repetitions)
-    kinds = foundKinds(integrators["Exact"], BODY_KINDS[kind][3], kind)
+    kinds = foundKinds(contexts[list(integrators).index("Exact")], integrators["Exact"], positions, BODY_KINDS[kind][3],
+                       kind)
     count = integrators["Exact"].getNumBodies()
     ratio = statistics.median(times["Exact"])/statistics.median(times["NoSquish"])
     rows = []

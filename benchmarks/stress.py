@@ -2,7 +2,7 @@
 """Stability stress runs of RigidBodyIntegrator (Exact and NoSquish), next to stock
 VerletIntegrator + SETTLE where the System allows it.
 
-Scenarios (built by openmmrigid.testing.stress, shared with the test suite's tests/python/test_stress.py):
+Scenarios (built by rigidtesting.stress, shared with the test suite's tests/python/test_stress.py):
 
   a. Rigid water, TIP3P and TIP4P-Ew (PME, about 500 molecules; fewer with --quick), NVE from a
      300 K state: short runs (1 ps) at 4, 5, ... 12 fs find the largest stable step of each
@@ -50,6 +50,7 @@ Exits with status 1 if any criterion fails. Writes docs/results/stress.md (the s
 run: benchmarks/results/stress.md) and a copy of the output to benchmarks/results/stress.log.
 """
 
+import os
 import argparse
 import sys
 import time
@@ -58,8 +59,10 @@ import numpy as np
 import openmm
 
 from benchmarking import RESULTS, ResultsDocument, closeLog, header, openLog, say
-from openmmrigid.testing import stress
-from openmmrigid.testing import stress as systems  # the cluster, exact rigid motion and state helpers
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, "tests", "python"))  # rigidtesting
+from rigidtesting import stress
+from rigidtesting import stress as systems  # the cluster, exact rigid motion and state helpers
+import rigidtesting
 
 ENERGY_BUDGET = 0.01          # of the initial kinetic energy
 STABILITY_BUDGET = 0.05       # of the initial kinetic energy: water at the edge of stability

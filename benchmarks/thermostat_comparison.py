@@ -33,6 +33,7 @@ both in benchmarks/results/), and benchmarks/results/thermostat_comparison.csv (
 (a copy of what is printed).
 """
 
+import os
 import argparse
 import sys
 import time
@@ -44,6 +45,7 @@ from openmm import app, unit
 import openmmrigid
 from benchmarking import (RESULTS, ResultsDocument, blockMean, cpuProperties, header, molecularKineticEnergies, openLog,
                           pyplot, radialDistribution, say, saveFigure, stamp, writeCsv)
+import rigidtesting  # tests/python, on the path benchmarking sets
 
 TEMPERATURE = 300*unit.kelvin
 FRICTION = 1/unit.picosecond
@@ -61,8 +63,8 @@ BOLTZMANN = unit.MOLAR_GAS_CONSTANT_R.value_in_unit(unit.kilojoule_per_mole/unit
 
 def buildBox(molecules):
     """A cubic box of about `molecules` TIP4P-Ew waters with PME and a MonteCarloBarostat."""
-    edge = (molecules/openmmrigid.testing.WATERS_PER_CUBIC_NANOMETRE)**(1/3)
-    topology, positions, system = openmmrigid.testing.waterBox("tip4pew", edge=edge)
+    edge = (molecules/rigidtesting.WATERS_PER_CUBIC_NANOMETRE)**(1/3)
+    topology, positions, system = rigidtesting.waterBox("tip4pew", edge=edge)
     barostat = openmm.MonteCarloBarostat(PRESSURE, TEMPERATURE, BAROSTAT_INTERVAL)
     barostat.setRandomNumberSeed(11)
     system.addForce(barostat)
@@ -80,7 +82,7 @@ class Molecules:
             self.atoms.append(massive)
             self.oxygens.extend(atom.index for atom in residue.atoms() if atom.element == app.element.oxygen)
         self.atoms = np.array(self.atoms)                         # (N, 3): O, H, H
-        self.particleMasses = openmmrigid.testing.particleMasses(system)
+        self.particleMasses = rigidtesting.particleMasses(system)
         self.masses = self.particleMasses[self.atoms]
         self.oxygens = np.array(self.oxygens)
         self.count = len(self.atoms)

@@ -5,8 +5,8 @@ One box of about 100 TIP3P waters (amber14/tip3p.xml, reaction field with a 0.6 
 CMMotionRemover), minimized and equilibrated with LangevinMiddleIntegrator + SETTLE. From that
 state, for each step size (1, 2, 4, 6, 8 fs by default):
 
-- RigidBodyIntegrator with the stochastic velocity rescaling of Bussi, Donadio and Parrinello
-  (setThermostat, collision time 0.1 ps). Its velocities are on-step: the rescaling after each step
+- RigidBodyBussiIntegrator: the stochastic velocity rescaling of Bussi, Donadio and Parrinello
+  (collision time 0.1 ps). Its velocities are on-step: the rescaling after each step
   samples their total kinetic energy from the canonical distribution, so the temperature it
   reports (computeSystemTemperature(), StateDataReporter's column) is right by construction. How
   that energy divides between translation and rotation is the dynamics' business: at large steps
@@ -17,8 +17,9 @@ state, for each step size (1, 2, 4, 6, 8 fs by default):
 
 Each run equilibrates for 2 ps of its own, then samples every 4 steps for `--time` ps: the reported
 temperature, the translational and rotational temperatures (3 N degrees of freedom each, from the
-integrator's own kinetic-energy split, or for the stock integrator from the molecules' centre-of-mass
-velocities), and the potential energy per molecule. Errors: standard errors of 20 block means.
+split of the rigid integrators' bodies, benchmarking.rigidKineticEnergies, or for the stock integrator
+from the molecules' centre-of-mass velocities), and the potential energy per molecule. Errors:
+standard errors of 20 block means.
 
     python benchmarks/thermostat_temperature.py              # 20 ps per run: about 10 minutes on 2 cores
     python benchmarks/thermostat_temperature.py --quick      # 1 and 4 fs, 1 ps per run: a smoke check
@@ -27,6 +28,8 @@ Writes docs/results/thermostat_temperature.md (a quick run: benchmarks/results/)
 benchmarks/results/thermostat_temperature.csv and .log.
 """
 
+import sys
+import os
 import argparse
 import time
 
@@ -35,7 +38,10 @@ import openmm
 from openmm import app, unit
 
 import openmmrigid
-from benchmarking import RESULTS, blockMean, molecularKineticEnergies, openRun, say, stamp, writeCsv
+from benchmarking import (RESULTS, blockMean, integratorBodies, integratorKineticEnergies, molecularKineticEnergies, openRun,
+                          say, stamp, writeCsv)
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, "tests", "python"))  # rigidtesting
+import rigidtesting
 
 TEMPERATURE = 300.0
 BOLTZMANN = unit.MOLAR_GAS_CONSTANT_R.value_in_unit(unit.kilojoule_per_mole/unit.kelvin)
@@ -45,7 +51,7 @@ BLOCKS = 20
 
 def equilibratedBox(edge, platform, properties):
     """The water box, its System and an equilibrated State (LangevinMiddleIntegrator + SETTLE, 2 fs, 10 ps)."""
-    topology, positions, system = openmmrigid.testing.waterBox(
+    topology, positions, system = rigidtesting.waterBox(
         "tip3p", edge=edge, forceField="amber14/tip3p.xml", nonbondedMethod=app.CutoffPeriodic,
         nonbondedCutoff=0.6*unit.nanometer, removeCMMotion=False)
     integrator = openmm.LangevinMiddleIntegrator(TEMPERATURE*unit.kelvin, 10/unit.picosecond, 2*unit.femtoseconds)
@@ -61,8 +67,7 @@ def equilibratedBox(edge, platform, properties):
 def makeIntegrator(kind, stepFs, seed):
     dt = stepFs*unit.femtoseconds
     if kind == "bussi":
-        integrator = openmmrigid.RigidBodyIntegrator(dt)
-        integrator.setThermostat(TEMPERATURE*unit.kelvin, 0.1*unit.picosecond)
+        integrator = openmmrigid.RigidBodyBussiIntegrator(TEMPERATURE*unit.kelvin, 0.1*unit.picosecond, dt)
     elif kind == "rigid-langevin":
         integrator = openmmrigid.RigidBodyLangevinIntegrator(TEMPERATURE*unit.kelvin, 10/unit.picosecond, dt)
     else:
@@ -71,12 +76,12 @@ def makeIntegrator(kind, stepFs, seed):
     return integrator
 
 
-def kineticParts(context, integrator, masses, molecules):
-    """Translational and rotational kinetic energy (kJ/mol): the integrator's split if it has one,
-    else the molecules' centre-of-mass motion and the rest."""
-    if hasattr(integrator, "getTranslationalKineticEnergy"):
-        return (integrator.getTranslationalKineticEnergy().value_in_unit(unit.kilojoule_per_mole),
-                integrator.getRotationalKineticEnergy().value_in_unit(unit.kilojoule_per_mole))
+def kineticParts(context, integrator, masses, molecules, bodies):
+    """Translational and rotational kinetic energy (kJ/mol): for a rigid integrator the split of its
+    bodies (`bodies`, benchmarking.integratorKineticEnergies), else the molecules' centre-of-mass
+    motion and the rest."""
+    if bodies is not None:
+        return integratorKineticEnergies(context, integrator, bodies, masses)
     velocities = context.getState(getVelocities=True).getVelocities(asNumpy=True)
     return molecularKineticEnergies(velocities.value_in_unit(unit.nanometer/unit.picosecond), masses, molecules)
 
@@ -89,12 +94,13 @@ def run(system, state, kind, stepFs, production, masses, molecules, platform, pr
     numWaters = len(molecules)
     dof = 6*numWaters
     samples = {"reported": [], "translational": [], "rotational": [], "potential": []}
+    bodies = integratorBodies(integrator) if isinstance(integrator, openmmrigid.RigidBodyIntegratorBase) else None
     try:
         integrator.step(steps(min(2.0, production)))
         for _ in range(max(20, steps(production)//4)):
             integrator.step(4)
             energy = context.getState(getEnergy=True)
-            translational, rotational = kineticParts(context, integrator, masses, molecules)
+            translational, rotational = kineticParts(context, integrator, masses, molecules, bodies)
             kinetic = energy.getKineticEnergy().value_in_unit(unit.kilojoule_per_mole)
             samples["reported"].append(2*kinetic/(dof*BOLTZMANN))
             samples["translational"].append(2*translational/(3*numWaters*BOLTZMANN))
@@ -145,7 +151,7 @@ def main():
     started = time.time()
     stamp("building and equilibrating the water box (LangevinMiddleIntegrator + SETTLE, 10 ps)")
     system, state = equilibratedBox(args.edge, platform, properties)
-    masses = openmmrigid.testing.particleMasses(system)
+    masses = rigidtesting.particleMasses(system)
     molecules = np.arange(system.getNumParticles()).reshape(-1, 3)
     stamp(f"{len(molecules)} waters; {args.time:g} ps per run after {min(2.0, args.time):g} ps of its own equilibration")
     rows = []

@@ -45,6 +45,7 @@ the results document is docs/results/xh_groups_model.md, whose section "Reading"
 is carried over when the document is written again (check it against the new numbers).
 """
 
+import sys
 import argparse
 import os
 import time
@@ -57,11 +58,13 @@ from openmm import app, unit
 import benchmarking
 import openmmrigid
 from benchmarking import say, stamp
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, "tests", "python"))  # rigidtesting
+import rigidtesting
 
 NAME = "xh_groups_model"
 RUNS = ("flexible", "xh-rigid", "xh-planar")
 TEMPERATURE = 310.0
-R = openmmrigid.testing.MOLAR_GAS_CONSTANT
+R = rigidtesting.MOLAR_GAS_CONSTANT
 RINGS = {"PHE": "CG CD1 CD2 CE1 CE2 CZ", "TYR": "CG CD1 CD2 CE1 CE2 CZ",
          "TRP": "CG CD1 CD2 NE1 CE2 CE3 CZ2 CZ3 CH2", "HIS": "CG ND1 CD2 CE1 NE2", "HID": "CG ND1 CD2 CE1 NE2",
          "HIE": "CG ND1 CD2 CE1 NE2", "HIP": "CG ND1 CD2 CE1 NE2"}
@@ -183,17 +186,20 @@ def makeIntegrator(run, topology, system, args):
     return integrator, openmmrigid.removeIntraBodyInteractions(system, bodies), bodies
 
 
-def soluteDegreesOfFreedom(run, system, integrator, bodies, solute):
+def soluteDegreesOfFreedom(run, system, bodies, solute, positions):
+    """The solute's degrees of freedom: 3 per atom less its constraints, or with bodies 3 per atom in no
+    body plus 3 + 0 (point), 2 (linear) or 3 per body (benchmarking.bodyKind, from `positions`, nm)."""
     if bodies is None:
         constraints = sum(1 for k in range(system.getNumConstraints())
                           if system.getConstraintParameters(k)[0] in solute)
         return 3*len(solute) - constraints
     inBodies = set()
     dof = 0
-    for number, body in enumerate(bodies):
+    for body in bodies:
         if body[0] in solute:
             inBodies.update(body)
-            kind = integrator.getBodyKind(number)
+            masses = [system.getParticleMass(i).value_in_unit(unit.dalton) for i in body]
+            kind = benchmarking.bodyKind(masses, np.asarray(positions)[list(body)])
             dof += 3 + {"point": 0, "linear": 2}.get(kind, 3)
     return dof + 3*len(set(solute) - inBodies)
 
@@ -233,7 +239,7 @@ def runOne(run, topology, start, minimum, system, analysis, measure, args, platf
     context.setPositions(start)
     context.setVelocitiesToTemperature(TEMPERATURE*unit.kelvin, 1)
     solute = measure["solute"]
-    dof = soluteDegreesOfFreedom(run, system, integrator, bodies, set(solute.tolist()))
+    dof = soluteDegreesOfFreedom(run, system, bodies, set(solute.tolist()), start)
     masses = np.array([system.getParticleMass(int(i)).value_in_unit(unit.dalton) for i in solute])
     every = max(1, int(round(args.save_every/args.step)))
     frames = int(round(args.production*1000/args.step))//every
