@@ -18,9 +18,11 @@
  * -------------------------------------------------------------------------- */
 
 #include "RandomRotation.h"
+#include "RigidBodyBussiIntegrator.h"
 #include "RigidBodyIntegrator.h"
 #include "RigidBodyLangevinIntegrator.h"
 #include "numerics/FreeRotor.h"
+#include "openmm/CMMotionRemover.h"
 #include "openmm/Context.h"
 #include "openmm/CustomBondForce.h"
 #include "openmm/CustomExternalForce.h"
@@ -258,6 +260,118 @@ void inertiaTensor(const vector<double>& masses, const vector<Vec3>& relative, d
 }
 
 /**
+ * The kind of a rigid body, from the principal moments of inertia of its particles about their
+ * centre of mass: "point" (one particle, or all moments zero), "linear" (one zero moment),
+ * "spherical" (three equal), "symmetric" (two equal) or "asymmetric". Moments within 1e-10 of the
+ * largest count as equal (or zero): the molecules here are exact by construction, and rounding
+ * leaves 1e-16.
+ */
+string bodyKind(const vector<double>& masses, const vector<Vec3>& positions) {
+    if (masses.size() < 2)
+        return "point";
+    Vec3 centre = centreOf(masses, positions);
+    vector<Vec3> relative;
+    for (const Vec3& r : positions)
+        relative.push_back(r - centre);
+    double inertia[3][3], moments[3], axes[3][3];
+    inertiaTensor(masses, relative, inertia);
+    jacobiEigen(inertia, moments, axes);  // ascending
+    const double tolerance = 1e-10*moments[2];
+    if (moments[2] <= tolerance)
+        return "point";
+    if (moments[0] <= tolerance)
+        return "linear";
+    const bool low = fabs(moments[1] - moments[0]) <= tolerance, high = fabs(moments[2] - moments[1]) <= tolerance;
+    if (low && high)
+        return "spherical";
+    return (low || high ? "symmetric" : "asymmetric");
+}
+
+/** The kind of body `body` of a system with these masses and positions (see bodyKind()). */
+string bodyKind(const vector<double>& masses, const vector<Vec3>& positions, const vector<int>& body) {
+    vector<double> m;
+    vector<Vec3> r;
+    for (int p : body) {
+        m.push_back(masses[p]);
+        r.push_back(positions[p]);
+    }
+    return bodyKind(m, r);
+}
+
+/**
+ * The degrees of freedom of a system moved by a rigid-body integrator with these bodies, counted from
+ * the System: 3 per free particle with mass, less one per constraint between two free particles, plus
+ * 3 translational and 0 (one particle), 2 (linear) or 3 rotational ones per body (its kind from the
+ * positions), less 3 with a CMMotionRemover.
+ */
+int countDegreesOfFreedom(const System& system, const vector<vector<int> >& bodies, const vector<Vec3>& positions) {
+    vector<double> masses;
+    for (int i = 0; i < system.getNumParticles(); i++)
+        masses.push_back(system.getParticleMass(i));
+    vector<bool> inBody(masses.size(), false);
+    int dof = 0;
+    for (const vector<int>& body : bodies) {
+        for (int p : body)
+            inBody[p] = true;
+        const string kind = bodyKind(masses, positions, body);
+        dof += 3 + (kind == "point" ? 0 : kind == "linear" ? 2 : 3);
+    }
+    for (size_t i = 0; i < masses.size(); i++)
+        if (!inBody[i] && masses[i] > 0.0)
+            dof += 3;
+    for (int c = 0; c < system.getNumConstraints(); c++) {
+        int i, j;
+        double length;
+        system.getConstraintParameters(c, i, j, length);
+        if (!inBody[i] && !inBody[j])
+            dof--;
+    }
+    for (int f = 0; f < system.getNumForces(); f++)
+        if (dynamic_cast<const CMMotionRemover*>(&system.getForce(f)) != nullptr)
+            dof -= 3;
+    return dof;
+}
+
+/**
+ * The kinetic energies of the centre-of-mass motion of the bodies and of the free particles
+ * (translational), and of the bodies' motion about their centres of mass (rotational), of these
+ * velocities. The sums run in the order of the integrator's own (bodies in order, each from its
+ * centre-of-mass velocity sum m v / M, then the free particles in index order), so that on the
+ * Reference platform they are the sums the integrator forms, bit for bit.
+ */
+void rigidKineticEnergies(const vector<double>& masses, const vector<vector<int> >& bodies, const vector<Vec3>& velocities,
+                          double& translational, double& rotational) {
+    translational = rotational = 0.0;
+    vector<bool> inBody(masses.size(), false);
+    for (const vector<int>& body : bodies) {
+        double mass = 0.0;
+        for (int p : body) {
+            mass += masses[p];
+            inBody[p] = true;
+        }
+        Vec3 velocity;
+        for (int p : body)
+            for (int k = 0; k < 3; k++)
+                velocity[k] += masses[p]*velocities[p][k]/mass;
+        translational += 0.5*mass*velocity.dot(velocity);
+        for (int p : body) {
+            Vec3 relative = velocities[p] - velocity;
+            rotational += 0.5*masses[p]*relative.dot(relative);
+        }
+    }
+    for (size_t p = 0; p < masses.size(); p++)
+        if (!inBody[p] && masses[p] > 0.0)
+            translational += 0.5*masses[p]*velocities[p].dot(velocities[p]);
+}
+
+/** The total of rigidKineticEnergies(): translational + rotational. */
+double rigidKineticEnergy(const vector<double>& masses, const vector<vector<int> >& bodies, const vector<Vec3>& velocities) {
+    double translational, rotational;
+    rigidKineticEnergies(masses, bodies, velocities, translational, rotational);
+    return translational + rotational;
+}
+
+/**
  * Add a molecule at centre with a random orientation and thermal rigid velocities (a body), or at
  * rest relative to a thermal centre-of-mass velocity (free atoms).
  */
@@ -378,6 +492,14 @@ const vector<RigidBodyIntegrator::Splitting> allSplittings = {RigidBodyIntegrato
 string splittingName(RigidBodyIntegrator::Splitting splitting) {
     const char* names[] = {"Verlet", "Omelyan2", "Yoshida4", "Omelyan4"};
     return names[splitting];
+}
+
+/** The force evaluations of a step of each splitting: one after each of its drifts. */
+int forceEvaluations(RigidBodyIntegrator::Splitting splitting) {
+    const std::map<RigidBodyIntegrator::Splitting, int> evaluations = {
+        {RigidBodyIntegrator::Verlet, 1}, {RigidBodyIntegrator::Omelyan2, 2}, {RigidBodyIntegrator::Yoshida4, 3},
+        {RigidBodyIntegrator::Omelyan4, 4}};
+    return evaluations.at(splitting);
 }
 
 /**
@@ -617,12 +739,21 @@ void sampleMoments(const vector<double>& x, double& mean, double& meanError, dou
     varianceError = sqrt((m4 - m2*m2)/n);
 }
 
-Run startThermostat(const Scene& scene, Platform& platform, double temperature, double collisionTime, double dt, int seed,
-                    const std::map<string, string>& properties = platformProperties) {
-    Run run;
-    run.integrator.reset(new RigidBodyIntegrator(dt, scene.bodies));
-    run.integrator->setThermostat(temperature, collisionTime);
+struct BussiRun {
+    std::unique_ptr<RigidBodyBussiIntegrator> integrator;
+    std::unique_ptr<Context> context;
+};
+
+/**
+ * A RigidBodyBussiIntegrator on the scene's bodies. With measure, the shadow work and the heat (the
+ * thermostat's work) are measured from the first step.
+ */
+BussiRun startThermostat(const Scene& scene, Platform& platform, double temperature, double collisionTime, double dt, int seed,
+                         const std::map<string, string>& properties = platformProperties, bool measure = false) {
+    BussiRun run;
+    run.integrator.reset(new RigidBodyBussiIntegrator(temperature, collisionTime, dt, scene.bodies));
     run.integrator->setRandomNumberSeed(seed);
+    run.integrator->setMeasureShadowWork(measure);
     run.context.reset(new Context(*scene.system, *run.integrator, platform, properties));
     run.context->setPositions(scene.positions);
     run.context->setVelocities(scene.velocities);

@@ -30,12 +30,12 @@ class RigidBodySystem;
 // (internal/RigidBodySystem.h) is built once per Context, and every question about the bodies is
 // answered from it, without touching the Context's state.
 /**
- * The base of RigidBodyIntegrator (constant energy, or constant temperature with its thermostat) and
+ * The base of RigidBodyIntegrator (constant energy), RigidBodyBussiIntegrator and
  * RigidBodyLangevinIntegrator (constant temperature): what every rigid-body integrator of this plugin
  * has in common. It holds the bodies (found from the System's rigid constraint clusters or given
- * explicitly), the rotation method of their free drift, and the questions one may ask about them:
- * their particles, kinds and moments, the translational and rotational kinetic energies, the degrees
- * of freedom and the temperature. It cannot be created on its own.
+ * explicitly) and the settings of their motion: the rotation method of the free drift, raised moments
+ * of inertia, multiple time steps; and it measures the run: the temperature, the shadow work and heat,
+ * and the accuracy check. It cannot be created on its own.
  */
 class OPENMM_EXPORT_RIGID RigidBodyIntegratorBase : public OpenMM::Integrator {
 public:
@@ -323,8 +323,8 @@ protected:
     /**
      * Add the thermostat's work the kernel has accumulated since it was last taken (rescaleMomenta()
      * on the device) to stepState.thermostatWork, and to stepState.heat if the heat is measured, if
-     * hasThermostatWork(): before the work or the heat is read, saved or reset, and before
-     * setMeasureHeat() changes what the steps since belong to. On a GPU this waits for the device
+     * hasThermostatWork(): before the work or the heat is read or saved, and before
+     * setMeasureShadowWork() changes what the steps since belong to. On a GPU this waits for the device
      * (unless no step has rescaled since).
      */
     void takeThermostatWork() const;

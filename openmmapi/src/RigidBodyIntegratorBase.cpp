@@ -451,7 +451,7 @@ void RigidBodyIntegratorBase::stateChanged(State::DataType changed) {
             needsProjection = false;
         }
         catch (const OpenMMException&) {
-            // Not lost: the bodies stay to be fitted, and the next step (or getBodyKind(), ...) says
+            // Not lost: the bodies stay to be fitted, and the next step (or computeSystemTemperature()) says
             // what is wrong, as the fit throws again there.
             needsProjection = true;
         }
