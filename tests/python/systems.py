@@ -1,7 +1,7 @@
 """Test systems and measurements shared by the Python tests of the integrators.
 
-From the package (openmmrigid.testing.stress, where the stress scenarios of tests and benchmarks
-build on them), re-exported here:
+From rigidtesting.stress (where the stress scenarios of tests and benchmarks build on them),
+re-exported here:
 - cluster(): an isolated cluster of small rigid molecules of every kind (asymmetric, symmetric and
   spherical tops, linear molecules, single-particle bodies) and free atoms, Lennard-Jones + Coulomb
   without cutoff as a CustomBondForce (double precision on Reference and CPU).
@@ -24,12 +24,13 @@ import openmm.app as app
 import openmm.unit as unit
 
 import openmmrigid
-# The systems and measurements that the stress scenarios build on live in the package (shared with
+# The systems and measurements that the stress scenarios build on live in rigidtesting (shared with
 # benchmarks/stress.py); the tests use them from there.
-from openmmrigid.testing import randomRotation
-from openmmrigid.testing.stress import (BOLTZMANN, KJ_PER_MOL_PER_NM, WATER_MODELS, Cluster, RigidMotion,  # noqa: F401
-                                        Solvated, _prepare, block_drift, cluster, energy_drift, platform_and_properties,
-                                        positions_of, rigid_motion, velocities_of, water_box)
+import rigidtesting
+from rigidtesting import randomRotation  # noqa: F401
+from rigidtesting.stress import (BOLTZMANN, KJ_PER_MOL_PER_NM, WATER_MODELS, Cluster, RigidMotion,  # noqa: F401
+                                 Solvated, _prepare, block_drift, cluster, energy_drift, platform_and_properties,
+                                 positions_of, rigid_motion, velocities_of, water_box)
 
 
 def _has_rigid_kernels(name):
@@ -175,7 +176,7 @@ def mixed_system(seed=11, size=2.2, cutoff=0.8):
     rng = np.random.default_rng(seed)
     forcefield = app.ForceField("amber14-all.xml", "amber14/tip3p.xml",
                                 io.StringIO(SMALL_MOLECULES_XML % _benzene_residue_xml()))
-    peptide = openmmrigid.testing.alanineDipeptide()
+    peptide = rigidtesting.alanineDipeptide()
     modeller = app.Modeller(peptide.topology, peptide.positions)
     peptidePositions = np.array(modeller.positions.value_in_unit(unit.nanometer))
     modeller.positions = [openmm.Vec3(*x) for x in peptidePositions - peptidePositions.mean(axis=0)
@@ -245,24 +246,21 @@ def run_energies(context, integrator, steps, interval):
 # Copies of an integrator, every way a user can make one
 # ------------------------------------------------------------------------------------------------
 
-COPY_METHODS = ["pickle", "copy", "deepcopy", "xml", "clone", "deserializeIntegrator"]
+#: openmm.XmlSerializer.deserialize() and clone() are no way to copy one: openmm is not patched on
+#: import, so they return a plain openmm.Integrator proxy; openmmrigid.deserializeIntegrator() reads the XML.
+COPY_METHODS = ["pickle", "copy", "deepcopy", "deserializeIntegrator"]
 
 
 def copy_integrator(integrator, method):
     """A copy of the integrator made by `method`, one of COPY_METHODS."""
     import copy
     import pickle
-    import openmmrigid
     if method == "pickle":
         return pickle.loads(pickle.dumps(integrator))
     if method == "copy":
         return copy.copy(integrator)
     if method == "deepcopy":
         return copy.deepcopy(integrator)
-    if method == "xml":
-        return openmm.XmlSerializer.deserialize(openmm.XmlSerializer.serialize(integrator))
-    if method == "clone":
-        return openmm.XmlSerializer.clone(integrator)
     if method == "deserializeIntegrator":
         return openmmrigid.deserializeIntegrator(openmm.XmlSerializer.serialize(integrator))
     raise ValueError(f"unknown copy method {method!r}; expected one of {COPY_METHODS}")

@@ -2,9 +2,11 @@
 reaches from its first particle, and linear when its particles lie on a line to the precision of the
 coordinates a user has (a PDB or .gro file).
 
-Each answer is computed here independently: the principal moments of the body's contiguous
-coordinates (numpy), the same body listed from another particle, the same molecule given exactly
-linear. Every case runs on Reference, CPU and the GPU platforms present.
+Each answer is computed here independently: the rigid motion of the body's contiguous coordinates
+(numpy: the velocities a body of that inertia tensor keeps of given particle velocities, and their
+kinetic energy), the same body listed from another particle, the same molecule given exactly linear,
+the degrees of freedom the temperature counts. Every case runs on Reference, CPU and the GPU
+platforms present.
 """
 
 import numpy as np
@@ -14,17 +16,35 @@ from openmm import unit
 
 import openmmrigid
 import systems
-from openmmrigid.testing import randomRotation
-from openmmrigid.testing.stress import inertia_tensor
-from systems import make_context, positions_of
+from rigidtesting import randomRotation
+from rigidtesting.stress import inertia_tensor
+from systems import make_context, positions_of, velocities_of
 
 PLATFORMS = systems.PLATFORMS
 EDGE = 3.0  # nm
 
 
-def principalMoments(masses, coordinates):
-    """The principal moments (ascending, amu nm^2) of point masses at these contiguous coordinates."""
-    return np.linalg.eigvalsh(inertia_tensor(np.asarray(masses, dtype=float), np.asarray(coordinates, dtype=float)))
+def rigidProjection(masses, coordinates, velocities):
+    """The rigid motion of particle velocities for a body at these contiguous coordinates: the
+    velocities V + omega x r with the body's momentum and angular momentum (omega = I^-1 L, I the
+    full inertia tensor of the coordinates), and their kinetic energy M V^2 / 2 + omega.I.omega / 2."""
+    masses, coordinates = np.asarray(masses, dtype=float), np.asarray(coordinates, dtype=float)
+    total = masses.sum()
+    relative = coordinates - masses @ coordinates / total
+    velocity = masses @ velocities / total
+    inertia = inertia_tensor(masses, coordinates)
+    omega = np.linalg.solve(inertia, np.sum(masses[:, None] * np.cross(relative, velocities - velocity), axis=0))
+    return velocity + np.cross(omega, relative), 0.5 * total * velocity @ velocity + 0.5 * omega @ inertia @ omega
+
+
+def kineticEnergy(context):
+    return context.getState(getEnergy=True).getKineticEnergy().value_in_unit(unit.kilojoule_per_mole)
+
+
+def temperatureDegreesOfFreedom(context, integrator):
+    """The degrees of freedom the integrator's temperature counts: 2 KE / (kB T)."""
+    temperature = integrator.computeSystemTemperature().value_in_unit(unit.kelvin)
+    return 2 * kineticEnergy(context) / (systems.BOLTZMANN * temperature)
 
 
 #: Box vectors (nm): a cube of edge EDGE, and a triclinic cell in OpenMM's reduced form with the same widths.
@@ -74,11 +94,17 @@ def wrapIntoCell(positions, box):
 @pytest.mark.parametrize("boxName", BOXES)
 @pytest.mark.parametrize("wrapped", [False, True], ids=["contiguous", "wrapped"])
 def test_large_body_assembled_whole(platformName, boxName, wrapped):
+    """The velocities read back are the rigid motion of the body as it is contiguous, their kinetic
+    energy that of its inertia tensor (the body folded at half the box, as a nearest-image assembly
+    from its first particle makes it, has another)."""
     masses, coordinates = kinkedRod()
     box = BOXES[boxName]
-    expected = principalMoments(masses, coordinates)
     rng = np.random.default_rng(5)
     velocities = rng.normal(scale=0.3, size=coordinates.shape)
+    rigid, energy = rigidProjection(masses, coordinates, velocities)
+    folded = coordinates.copy()
+    folded[np.abs(coordinates[:, 0] - coordinates[0, 0]) > 0.5 * EDGE] -= box[0]
+    assert abs(rigidProjection(masses, folded, velocities)[1] / energy - 1) > 0.01  # the test can tell
     given = wrapIntoCell(coordinates, box) if wrapped else coordinates
     runs = {}
     # Listed from an end (its first particle 1.6 nm from the far end), and from the middle.
@@ -87,8 +113,8 @@ def test_large_body_assembled_whole(platformName, boxName, wrapped):
         context = make_context(periodicSystem(masses, box=box), integrator, platformName)
         context.setPositions(given)
         context.setVelocities(velocities)
-        np.testing.assert_allclose(integrator.getBodyMoments(0).value_in_unit(unit.amu * unit.nanometer**2), expected,
-                                   rtol=1e-10, atol=1e-12)
+        assert kineticEnergy(context) == pytest.approx(energy, rel=1e-10)
+        np.testing.assert_allclose(velocities_of(context), rigid, rtol=0, atol=1e-10)
         integrator.step(100)
         runs[order[0][0]] = positions_of(context)
     for positions in runs.values():
@@ -117,22 +143,27 @@ def test_body_with_a_link_as_long_as_half_the_box_is_an_error(platformName):
 
 def test_solvated_dipeptide_body_from_topology():
     """The issue's path: alanine dipeptide as one body from rigidBodiesFromTopology (its first atom
-    an end of the molecule) in a 1.45 nm water box: the moments are those of the peptide as built."""
+    an end of the molecule) in a 1.45 nm water box: the peptide moves with the inertia tensor of the
+    peptide as built (its velocities read back are the rigid motion of it, their kinetic energy that
+    of its inertia)."""
     from test_topology_bodies import solvatedDipeptide
     size = 1.45
     topology, positions, system = solvatedDipeptide("tip3p", size=size)
     bodies = openmmrigid.rigidBodiesFromTopology(topology, ["HOH"], merge=[[0, 1, 2]], system=system)
     peptide = bodies[0]
     masses = [system.getParticleMass(i).value_in_unit(unit.amu) for i in peptide]
-    expected = principalMoments(masses, positions[peptide])
     reach = np.linalg.norm(positions[peptide] - positions[peptide[0]], axis=1).max()
     assert reach > 0.5 * size  # the case at risk: farther from its first atom than half the box
     lean = openmmrigid.removeIntraBodyInteractions(system, bodies)
     integrator = openmmrigid.RigidBodyIntegrator(0.001, bodies)
     context = make_context(lean, integrator, "Reference")
     context.setPositions(positions)
-    np.testing.assert_allclose(integrator.getBodyMoments(0).value_in_unit(unit.amu * unit.nanometer**2), expected,
-                               rtol=1e-9)
+    velocities = np.zeros((system.getNumParticles(), 3))
+    velocities[peptide] = np.random.default_rng(3).normal(scale=0.3, size=(len(peptide), 3))
+    context.setVelocities(velocities)
+    rigid, energy = rigidProjection(masses, positions[peptide], velocities[peptide])
+    assert kineticEnergy(context) == pytest.approx(energy, rel=1e-9)
+    np.testing.assert_allclose(velocities_of(context)[peptide], rigid, rtol=0, atol=1e-9)
 
 
 # ------------------------------------------------------------------------------------------------
@@ -163,8 +194,6 @@ def test_co2_from_rounded_coordinates_is_linear(platformName, precision):
     integrator = openmmrigid.RigidBodyIntegrator(0.002, bodies)
     context = make_context(system, integrator, platformName)
     context.setPositions(rounded)
-    assert [integrator.getBodyKind(b) for b in range(count)] == ["linear"] * count
-    assert integrator.getNumDegreesOfFreedom() == 5 * count
     # Put on a line: the fitted positions are within the rounding of the given ones, each body
     # exactly straight, its bond lengths those of the rounded input to the rounding.
     fitted = positions_of(context)
@@ -175,11 +204,13 @@ def test_co2_from_rounded_coordinates_is_linear(platformName, precision):
     # The same motion as the exactly linear molecules (a fresh Context), to the size of the rounding.
     velocities = rng.normal(scale=0.3, size=exact.shape)
     context.setVelocities(velocities)
+    # Linear: two rotational degrees of freedom per body, none about its axis.
+    assert temperatureDegreesOfFreedom(context, integrator) == pytest.approx(5 * count, rel=1e-9)
     answerIntegrator = openmmrigid.RigidBodyIntegrator(0.002, bodies)
     answer = make_context(system, answerIntegrator, platformName)
     answer.setPositions(exact)
     answer.setVelocities(velocities)
-    assert [answerIntegrator.getBodyKind(b) for b in range(count)] == ["linear"] * count
+    assert temperatureDegreesOfFreedom(answer, answerIntegrator) == pytest.approx(5 * count, rel=1e-9)
     integrator.step(200)
     answerIntegrator.step(200)
     energy = context.getState(getEnergy=True).getKineticEnergy().value_in_unit(unit.kilojoule_per_mole)
@@ -189,13 +220,23 @@ def test_co2_from_rounded_coordinates_is_linear(platformName, precision):
 
 def test_bent_molecule_stays_asymmetric():
     """A genuinely bent triatomic (170 degrees: its centre 0.01 nm off the line of its ends) is not
-    straightened."""
+    straightened: it keeps its place, rotates about three axes (six degrees of freedom), with the
+    inertia tensor of its coordinates, and moves freely as the exact rotor of its moments."""
     half = np.radians(85.0)
     coordinates = np.array([[0, 0, 0], [CARBON_OXYGEN * np.sin(half), 0, CARBON_OXYGEN * np.cos(half)],
                             [-CARBON_OXYGEN * np.sin(half), 0, CARBON_OXYGEN * np.cos(half)]]) + 1.0
     integrator = openmmrigid.RigidBodyIntegrator(0.002, [[0, 1, 2]])
     context = make_context(periodicSystem(CO2_MASSES), integrator, "Reference")
     context.setPositions(coordinates)
-    assert integrator.getBodyKind(0) == "asymmetric"
-    np.testing.assert_allclose(integrator.getBodyMoments(0).value_in_unit(unit.amu * unit.nanometer**2),
-                               principalMoments(CO2_MASSES, coordinates), rtol=1e-10)
+    velocities = np.random.default_rng(4).normal(scale=0.3, size=(3, 3))
+    context.setVelocities(velocities)
+    assert np.abs(positions_of(context) - coordinates).max() < 1e-12
+    assert temperatureDegreesOfFreedom(context, integrator) == pytest.approx(6, rel=1e-9)
+    rigid, energy = rigidProjection(CO2_MASSES, coordinates, velocities)
+    assert kineticEnergy(context) == pytest.approx(energy, rel=1e-10)
+    np.testing.assert_allclose(velocities_of(context), rigid, rtol=0, atol=1e-10)
+    exact = systems.rigid_motion(np.array(CO2_MASSES), coordinates, rigid, [[0, 1, 2]], [])
+    integrator.step(100)
+    expectedPositions, expectedVelocities = exact(0.2)
+    assert np.abs(positions_of(context) - expectedPositions).max() < 1e-9
+    assert np.abs(velocities_of(context) - expectedVelocities).max() < 1e-8

@@ -28,6 +28,8 @@ import pytest
 
 import systems
 from openmmrigid import RigidBodyIntegrator
+from rigidtesting import particleMasses
+from rigidtesting.bodies import bodyKind, rigidDegreesOfFreedom
 
 # One platform per claim: the C++ suites run each on Reference, CPU and OpenCL.
 PLATFORM = "Reference"
@@ -251,8 +253,15 @@ def test_mixed_system(mixed, platform="CPU"):
     integrator = rigid_integrator(0.002, bodies)
     integrator.setConstraintTolerance(MIXED_TOLERANCE)
     context = start(mixed.system, integrator, platform, mixed.positions, mixed.velocities)
-    kinds = [integrator.getBodyKind(i) for i in range(integrator.getNumBodies())]
+    masses = particleMasses(mixed.system)
+    kinds = [bodyKind(masses[body], mixed.positions[body]) for body in bodies]
     assert kinds[-3:] == ["symmetric", "linear", "point"]
+    # The integrator moves them so: its temperature counts 2 rotational degrees of freedom for the
+    # CO2, none for the Na+.
+    dof = rigidDegreesOfFreedom(context, integrator)
+    kinetic = context.getState(getEnergy=True).getKineticEnergy().value_in_unit(unit.kilojoule_per_mole)
+    assert integrator.computeSystemTemperature().value_in_unit(unit.kelvin) == pytest.approx(
+        2 * kinetic / (dof * systems.BOLTZMANN), rel=1e-9)
     times, energies = systems.run_energies(context, integrator, MIXED_STEPS, MIXED_INTERVAL)
     positions, velocities = systems.positions_of(context), systems.velocities_of(context)
     assert np.all(np.isfinite(positions))
@@ -276,7 +285,6 @@ def test_mixed_system(mixed, platform="CPU"):
         assert abs(rate) <= MIXED_TOLERANCE * 10.0, f"constraint {k} ({i}-{j}): length changes at {rate} nm/ps"
     assert checked == 12  # the peptide's bonds to hydrogen
 
-    dof = integrator.getNumDegreesOfFreedom()
     budget = 0.002 * systems.BOLTZMANN * 300.0 * dof
     slope, error, fluctuation = systems.energy_drift(times, energies)
     report = (f"mixed on {platform}: {dof} dof, drift {1000 * slope:.0f} +- {1000 * error:.0f} kJ/mol/ns, rms "

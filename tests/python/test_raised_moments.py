@@ -2,8 +2,9 @@
 counterpart of hydrogen mass repartitioning:
 
 - the moments the dynamics uses are the particles' own with every nonzero one raised to the floor,
-  in the same axes; kinds follow (a water raised past its largest moment is a spherical top; the
-  zero moment of a linear body stays zero; a point stays a point);
+  in the same axes (the kinetic energy of a turn about each principal axis); a water raised past its
+  largest moment turns as a spherical top; the zero moment of a linear body stays zero and a point
+  stays a point (the degrees of freedom the temperature counts);
 - a free body moves as the exact free rotor of the raised moments with the angular velocity of its
   particles' velocities (openmmrigid.FreeRotor as an independent reference), on every platform;
 - every way of writing velocities keeps the angular velocity (setVelocities, a checkpoint loaded
@@ -30,8 +31,10 @@ import openmm.unit as unit
 import pytest
 
 import openmmrigid
+import rigidtesting
 import systems
 from openmmrigid import RigidBodyIntegrator, RigidBodyLangevinIntegrator
+from rigidtesting.bodies import bodyKind, principalMoments, rigidDegreesOfFreedom, rigidKineticEnergies
 from test_langevin import BOLTZMANN, assert_water_temperatures, block_mean, small_water_box  # noqa: F401
 
 AMU_NM2 = unit.amu * unit.nanometer**2
@@ -74,37 +77,71 @@ def kinetic_energy_of_raised(masses, positions, velocities, bodies, free, floor)
 # ------------------------------------------------------------------------------------------------
 
 def test_moments_are_raised_to_the_floor_in_the_same_axes():
+    """Each body of the cluster (every kind) turned at 1 rad/ps about each principal axis of its
+    particles, nothing else moving, has the kinetic energy I'_k / 2 of that axis's raised moment
+    (1e-13 relative): the moments are the particles' own, every nonzero one raised to the floor, in
+    the same axes. The temperature counts the degrees of freedom of the particles' kinds (a linear
+    body's zero moment stays zero: two rotational ones; a point none)."""
     cluster = systems.cluster(seed=3, grid=(3, 3, 2), forces=False)
-    plain = RigidBodyIntegrator(0.001, cluster.bodies)
-    plainContext = systems.make_context(cluster.system, plain, "Reference")
-    plainContext.setPositions(cluster.positions)
     floor = 0.012
     integrator = RigidBodyIntegrator(0.001, cluster.bodies)
     integrator.setMinimumMomentOfInertia(floor * AMU_NM2)
     assert integrator.getMinimumMomentOfInertia().value_in_unit(AMU_NM2) == floor
     context = systems.make_context(cluster.system, integrator, "Reference")
     context.setPositions(cluster.positions)
-    kinds = set()
-    for b in range(integrator.getNumBodies()):
-        mass = np.array(integrator.getBodyMassMoments(b).value_in_unit(AMU_NM2))
-        assert np.array_equal(mass, plain.getBodyMoments(b).value_in_unit(AMU_NM2))
-        moments = np.array(integrator.getBodyMoments(b).value_in_unit(AMU_NM2))
-        np.testing.assert_allclose(moments, raised(mass, floor), rtol=1e-13, atol=0)
-        kind, plainKind = integrator.getBodyKind(b), plain.getBodyKind(b)
-        kinds.add(plainKind)
-        if plainKind in ("point", "linear"):
-            assert kind == plainKind
-        elif np.all(mass < floor):
-            assert kind == "spherical"
-        else:
-            assert kind == {3: "asymmetric", 2: "symmetric", 1: "spherical"}[len(set(np.round(moments / moments[-1], 12)))]
+    kinds = {bodyKind(cluster.masses[body], cluster.positions[body]) for body in cluster.bodies}
     assert kinds >= {"point", "linear", "symmetric", "asymmetric", "spherical"}
-    # A water (the cluster's first body) raised past its largest moment is a spherical top.
-    water = RigidBodyIntegrator(0.001, cluster.bodies)
-    water.setMinimumMomentOfInertia(0.05)
-    waterContext = systems.make_context(cluster.system, water, "Reference")
-    waterContext.setPositions(cluster.positions)
-    assert water.getBodyKind(0) == "spherical" and water.getBodyMoments(0).value_in_unit(AMU_NM2) == [0.05] * 3
+    raisedSome = keptSome = False
+    for body in cluster.bodies:
+        if len(body) == 1:
+            continue
+        _, moments, axes, _ = body_omegas(cluster.masses, cluster.positions, np.zeros_like(cluster.positions), [body])[0]
+        moments = np.where(moments > 1e-9 * moments[-1], moments, 0.0)
+        relative = cluster.positions[body] - cluster.masses[body] @ cluster.positions[body] / cluster.masses[body].sum()
+        for k in range(3):
+            velocities = np.zeros_like(cluster.positions)
+            velocities[body] = np.cross(axes[:, k], relative)
+            context.setVelocities(velocities)
+            kinetic = context.getState(getEnergy=True).getKineticEnergy().value_in_unit(unit.kilojoule_per_mole)
+            if moments[k] == 0.0:
+                assert kinetic < 1e-25  # about a linear body's axis: no particle moves
+            else:
+                assert kinetic == pytest.approx(0.5 * raised(moments, floor)[k], rel=1e-13)
+            raisedSome |= 0 < moments[k] < floor
+            keptSome |= moments[k] > floor
+    assert raisedSome and keptSome
+    context.setVelocities(cluster.velocities)
+    kinetic = context.getState(getEnergy=True).getKineticEnergy().value_in_unit(unit.kilojoule_per_mole)
+    assert integrator.computeSystemTemperature().value_in_unit(unit.kelvin) == pytest.approx(
+        2 * kinetic / (rigidDegreesOfFreedom(context, integrator) * BOLTZMANN), rel=1e-12)
+
+
+def test_a_water_raised_past_its_largest_moment_is_a_spherical_top():
+    """A water (the cluster's first body) with every moment raised to 0.05 amu nm^2 turns freely about
+    any axis at a constant angular velocity (1e-10 relative after 0.05 ps, a radian), its kinetic
+    energy 0.05 omega^2 / 2; without the floor the same water tumbles."""
+    cluster = systems.cluster(seed=3, grid=(3, 3, 2), forces=False)
+    water = cluster.bodies[0]
+    assert np.all(principalMoments(cluster.masses[water], cluster.positions[water]) < 0.05)
+    omega = np.array([5.0, 10.0, 15.0])
+    relative = cluster.positions[water] - cluster.masses[water] @ cluster.positions[water] / cluster.masses[water].sum()
+    velocities = np.zeros_like(cluster.positions)
+    velocities[water] = np.cross(omega, relative)
+    for floor in (0.05, 0.0):
+        integrator = RigidBodyIntegrator(0.001, cluster.bodies)
+        integrator.setMinimumMomentOfInertia(floor)
+        context = systems.make_context(cluster.system, integrator, "Reference")
+        context.setPositions(cluster.positions)
+        context.setVelocities(velocities)
+        integrator.step(50)
+        turned = body_omegas(cluster.masses, systems.positions_of(context), systems.velocities_of(context), [water])[0][0]
+        change = np.linalg.norm(turned - omega) / np.linalg.norm(omega)
+        if floor > 0:
+            assert change < 1e-10, turned
+            kinetic = context.getState(getEnergy=True).getKineticEnergy().value_in_unit(unit.kilojoule_per_mole)
+            assert kinetic == pytest.approx(0.5 * floor * omega @ omega, rel=1e-12)
+        else:
+            assert change > 0.01, turned
 
 
 def test_bad_minimum_moments_are_refused():
@@ -160,8 +197,9 @@ def test_free_bodies_move_as_the_exact_rotor_of_the_raised_moments(platform):
 @pytest.mark.parametrize("platform", systems.PLATFORMS)
 def test_velocities_and_kinetic_energy_with_raised_moments(platform):
     """Rigid velocities set in the Context read back unchanged (the projection keeps the angular
-    velocity), and the kinetic energy (State, getTranslational/RotationalKineticEnergy, the
-    temperature) is that of the raised moments, computed here from the velocities with numpy."""
+    velocity), and the kinetic energy (State, the temperature) is that of the raised moments, computed
+    here from the velocities with numpy, and rigidtesting.bodies.rigidKineticEnergies's translational
+    and rotational parts add up to it."""
     cluster = systems.cluster(seed=6, grid=(3, 3, 2))
     integrator = RigidBodyLangevinIntegrator(300, 1, 0.001, cluster.bodies)
     integrator.setMinimumMomentOfInertia(FLOOR)
@@ -176,9 +214,8 @@ def test_velocities_and_kinetic_energy_with_raised_moments(platform):
     rtol = 1e-10 if double else 1e-5
     state = context.getState(getEnergy=True)
     assert state.getKineticEnergy().value_in_unit(unit.kilojoule_per_mole) == pytest.approx(expected, rel=rtol)
-    total = (integrator.getTranslationalKineticEnergy() + integrator.getRotationalKineticEnergy()).value_in_unit(unit.kilojoule_per_mole)
-    assert total == pytest.approx(expected, rel=rtol)
-    temperature = 2 * expected / (integrator.getNumDegreesOfFreedom() * BOLTZMANN)
+    assert sum(rigidKineticEnergies(context, integrator)) == pytest.approx(expected, rel=rtol)
+    temperature = 2 * expected / (rigidDegreesOfFreedom(context, integrator) * BOLTZMANN)
     assert integrator.computeSystemTemperature().value_in_unit(unit.kelvin) == pytest.approx(temperature, rel=rtol)
 
 
@@ -321,14 +358,17 @@ def test_water_reads_the_bath_temperature_with_raised_moments(small_water_box):
     context = openmm.Context(system, integrator, *systems.platform_and_properties("CPU"))
     context.setState(state)
     integrator.step(500)
-    assert integrator.getBodyKind(0) == "spherical"
-    assert_water_temperatures(integrator, 300.0, samples=2500, every=2, blocks=20, label="raised moments: ", tolerance=0.015)
+    water = list(integrator.getBodyParticles(0))
+    masses = rigidtesting.particleMasses(system)[water]
+    assert np.all(principalMoments(masses, systems.positions_of(context)[water]) < 0.04)  # all raised: spherical tops
+    assert_water_temperatures(integrator, 300.0, samples=2500, every=2, blocks=20, label="raised moments: ", tolerance=0.015,
+                              context=context)
 
 
 def test_xml_keeps_the_minimum_moment():
     integrator = RigidBodyLangevinIntegrator(300, 1, 0.004)
     integrator.setMinimumMomentOfInertia(0.025)
-    copy = openmm.XmlSerializer.deserialize(openmm.XmlSerializer.serialize(integrator))
+    copy = openmmrigid.deserializeIntegrator(openmm.XmlSerializer.serialize(integrator))
     assert isinstance(copy, RigidBodyLangevinIntegrator)
     assert copy.getMinimumMomentOfInertia().value_in_unit(AMU_NM2) == 0.025
 
@@ -350,8 +390,7 @@ def test_velocities_to_temperature_take_the_offset_with_the_raised_moments():
         context.setPositions(cluster.positions)
         context.setVelocitiesToTemperature(300, 11)
         contexts.append(context)
-    offset = langevin.getVelocityTimeOffset().value_in_unit(unit.picosecond)
-    assert offset == pytest.approx(dt / 2)
+    offset = dt / 2
     positions = systems.positions_of(contexts[1])
     drawn = systems.velocities_of(contexts[1])
     forces = contexts[1].getState(getForces=True).getForces(asNumpy=True).value_in_unit(unit.kilojoule_per_mole / unit.nanometer)
@@ -418,8 +457,12 @@ def test_tip4pew_with_a_barostat_reads_the_bath_with_raised_moments():
     context.setVelocitiesToTemperature(300, 29)
     volume = context.getState().getPeriodicBoxVolume()
     integrator.step(300)
-    assert integrator.getBodyKind(0) == "spherical" and len(integrator.getBodyParticles(0)) == 3
-    assert_water_temperatures(integrator, 300.0, samples=1500, every=2, blocks=15, label="TIP4P-Ew NPT: ", tolerance=0.02)
+    water = list(integrator.getBodyParticles(0))
+    assert len(water) == 3
+    masses = rigidtesting.particleMasses(system)[water]
+    assert np.all(principalMoments(masses, systems.positions_of(context)[water]) < 0.04)  # all raised: spherical tops
+    assert_water_temperatures(integrator, 300.0, samples=1500, every=2, blocks=15, label="TIP4P-Ew NPT: ", tolerance=0.02,
+                              context=context)
     state = context.getState(getPositions=True)
     assert state.getPeriodicBoxVolume() != volume
     x = state.getPositions(asNumpy=True).value_in_unit(unit.nanometer)
@@ -462,7 +505,9 @@ def test_four_times_the_masses_is_half_the_step(small_water_box, langevin):
         context.setPeriodicBoxVectors(*state.getPeriodicBoxVectors())
         context.setPositions(positions)
         context.setVelocities(velocities / root)
-        assert integrator.getBodyKind(0) == "asymmetric"
+        water = list(integrator.getBodyParticles(0))
+        moments = raised(principalMoments(rigidtesting.particleMasses(model)[water], positions[water]), 0.01 * scale)
+        assert moments[0] == 0.01 * scale and len(set(np.round(moments / moments[-1], 12))) == 3  # raised, asymmetric
         integrator.step(40)
         final = context.getState(getPositions=True, getVelocities=True, getEnergy=True)
         runs.append((final.getPositions(asNumpy=True).value_in_unit(unit.nanometer),
@@ -496,7 +541,8 @@ def test_the_largest_minimum_moment_still_draws_the_bath_temperature():
     context.setVelocitiesToTemperature(300, 3)
     kinetic = context.getState(getEnergy=True).getKineticEnergy().value_in_unit(unit.kilojoule_per_mole)
     assert integrator.computeSystemTemperature().value_in_unit(unit.kelvin) == pytest.approx(300, rel=0.3)
-    rotational = integrator.getRotationalKineticEnergy().value_in_unit(unit.kilojoule_per_mole)
+    translational, rotational = rigidKineticEnergies(context, integrator)
+    assert translational + rotational == pytest.approx(kinetic, rel=1e-6)
     assert rotational / kinetic == pytest.approx(0.5, abs=0.15)
     integrator.step(100)
     after = context.getState(getEnergy=True).getKineticEnergy().value_in_unit(unit.kilojoule_per_mole)
@@ -516,7 +562,7 @@ def test_compound_integrator_with_raised_moments_is_refused():
         compound.addIntegrator(rigid)
         compound.addIntegrator(openmm.VerletIntegrator(0.001))
         if floor > 0:
-            with pytest.raises(openmm.OpenMMException, match="RigidBodyLangevinIntegrator: raised moments of inertia .* cannot be "
+            with pytest.raises(openmm.OpenMMException, match="RigidBodyLangevinIntegrator: raised moments of inertia cannot be "
                                                              "used in a CompoundIntegrator"):
                 systems.make_context(waters.system, compound, "Reference")
         else:
@@ -553,5 +599,6 @@ def test_checkpoint_from_another_minimum_moment_is_refused(platform):
     same.setMinimumMomentOfInertia(0.04)
     sameContext = systems.make_context(cluster.system, same, platform)
     sameContext.loadCheckpoint(checkpoint)
-    assert same.getRotationalKineticEnergy().value_in_unit(unit.kilojoule_per_mole) == pytest.approx(
-        writer.getRotationalKineticEnergy().value_in_unit(unit.kilojoule_per_mole), rel=1e-6)
+    assert rigidKineticEnergies(sameContext, same)[1] == pytest.approx(rigidKineticEnergies(context, writer)[1], rel=1e-6)
+    assert sameContext.getState(getEnergy=True).getKineticEnergy() / unit.kilojoule_per_mole == pytest.approx(
+        context.getState(getEnergy=True).getKineticEnergy() / unit.kilojoule_per_mole, rel=1e-6)

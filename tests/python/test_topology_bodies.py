@@ -16,12 +16,15 @@ import pytest
 from openmm import app, unit
 
 import openmmrigid
+import rigidtesting
+from rigidtesting.bodies import bodyKind, rigidDegreesOfFreedom
+from rigidtesting.stress import BOLTZMANN
 
 
 def solvatedDipeptide(model="tip4pew", size=1.8, constraints=app.HBonds):
     """Alanine dipeptide (ACE ALA NME) in a small water box: topology, positions (nm), system."""
     forceField = app.ForceField("amber14-all.xml", f"amber14/{model}.xml")
-    pdb = openmmrigid.testing.alanineDipeptide()
+    pdb = rigidtesting.alanineDipeptide()
     modeller = app.Modeller(pdb.topology, pdb.positions)
     positions = np.array(modeller.positions.value_in_unit(unit.nanometer))
     modeller.positions = (positions - positions.mean(axis=0) + 0.5*size)*unit.nanometer
@@ -98,8 +101,17 @@ def test_bodies_drive_the_integrator(tip4pew):
     context.setPositions(positions)
     assert integrator.getNumBodies() == len(bodies)
     assert sorted(list(integrator.getBodyParticles(b)) for b in range(len(bodies))) == sorted(bodies)
-    kinds = {integrator.getBodyKind(b) for b in range(len(bodies))}
+    masses = np.array([system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles())])
+    kinds = {bodyKind(masses[body], positions[body]) for body in bodies}
     assert kinds == {"asymmetric"}
+    # The integrator moves each as a rotor about three axes: 6 degrees of freedom a body, less the
+    # 3 of the CMMotionRemover, in the temperature it reports.
+    context.setVelocitiesToTemperature(300 * unit.kelvin, 5)
+    dof = rigidDegreesOfFreedom(context, integrator)
+    assert dof == 6 * len(bodies) - 3
+    kinetic = context.getState(getEnergy=True).getKineticEnergy().value_in_unit(unit.kilojoule_per_mole)
+    temperature = integrator.computeSystemTemperature().value_in_unit(unit.kelvin)
+    assert temperature == pytest.approx(2 * kinetic / (dof * BOLTZMANN), rel=1e-9)
 
 
 @pytest.mark.parametrize("arguments, message", [

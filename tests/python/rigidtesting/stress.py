@@ -38,6 +38,7 @@ import openmm.unit as unit
 
 import openmmrigid
 from . import randomRotation as _random_rotation, waterBox
+from .bodies import bodyKind, rigidDegreesOfFreedom
 
 # ------------------------------------------------------------------------------------------------
 # What the scenarios are built from: small molecules of every body kind, a cluster of them, a water
@@ -732,8 +733,9 @@ class Run:
     message if the integrator raised), finite (no NaN or infinity seen), times, energies (kJ/mol,
     total), kinetic0 (initial kinetic energy), dof, rigidity (largest change of any fixed distance,
     nm), momentumChange (|P - P0|, amu nm/ps) and momentum0 (|P0|), angularChange and angular0
-    (isolated systems only, else None), crossings (separatrix crossings seen, per body), kinds, and
-    context (the Context at the end of the run)."""
+    (isolated systems only, else None), crossings (separatrix crossings seen, per body), kinds (of the
+    bodies, as rigidtesting.bodies.bodyKind names them from the starting positions), and context and
+    integrator (at the end of the run)."""
 
     def max_energy_change(self):
         return float(np.max(np.abs(self.energies - self.energies[0]))) if len(self.energies) > 1 else 0.0
@@ -765,13 +767,15 @@ def run(scenario, integrator, platform, steps, interval, catch=False, properties
     context = openmm.Context(scenario.system, integrator, platformObject, dict(defaults, **(properties or {})))
     context.setPositions(scenario.positions)
     context.setVelocities(scenario.velocities)
-    rigid = isinstance(integrator, openmmrigid.RigidBodyIntegrator)
-    bodies = ([integrator.getBodyParticles(b) for b in range(integrator.getNumBodies())] if rigid
+    rigid = isinstance(integrator, openmmrigid.RigidBodyIntegratorBase)
+    bodies = ([list(integrator.getBodyParticles(b)) for b in range(integrator.getNumBodies())] if rigid
               else (scenario.bodies or []))
     result = Run()
+    result.integrator = integrator
     result.stepSize = integrator.getStepSize().value_in_unit(unit.picosecond)
-    result.kinds = sorted({integrator.getBodyKind(b) for b in range(integrator.getNumBodies())}) if rigid else []
-    result.dof = (integrator.getNumDegreesOfFreedom() if rigid else
+    result.kinds = (sorted({bodyKind(scenario.masses[body], scenario.positions[body]) for body in bodies}) if rigid
+                    else [])
+    result.dof = (rigidDegreesOfFreedom(context, integrator) if rigid else
                   3 * scenario.system.getNumParticles()
                   - sum(scenario.system.isVirtualSite(i) * 3 for i in range(scenario.system.getNumParticles()))
                   - scenario.system.getNumConstraints())
