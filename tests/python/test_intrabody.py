@@ -25,6 +25,7 @@ import pytest
 from openmm import app, unit
 
 import openmmrigid
+import rigidtesting
 
 REFERENCE = openmm.Platform.getPlatformByName("Reference")
 # ACE and ALA merged, but ALA's carbonyl C and O free; NME a body of its own.
@@ -88,7 +89,7 @@ def addEveryBondedType(system, positions):
 
 
 def vacuumDipeptide():
-    pdb = openmmrigid.testing.alanineDipeptide()
+    pdb = rigidtesting.alanineDipeptide()
     forceField = app.ForceField("amber14-all.xml")
     system = forceField.createSystem(pdb.topology, nonbondedMethod=app.NoCutoff, constraints=app.HBonds)
     positions = np.array(pdb.positions.value_in_unit(unit.nanometer))
@@ -98,7 +99,7 @@ def vacuumDipeptide():
 
 
 def solvatedDipeptide():
-    pdb = openmmrigid.testing.alanineDipeptide()
+    pdb = rigidtesting.alanineDipeptide()
     forceField = app.ForceField("amber14-all.xml", "amber14/tip3p.xml")
     modeller = app.Modeller(pdb.topology, pdb.positions)
     size = 1.8
