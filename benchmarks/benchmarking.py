@@ -1,6 +1,7 @@
 """What the benchmarks share: progress and logs, the run's provenance and its results document,
-CSV, plots and the statistics of time series. Systems shared with the examples (water boxes, random
-rotations, energy drift) are in the package, ``rigidtesting``.
+CSV, plots and the statistics of time series. What the benchmarks share with the tests (water boxes,
+random rotations, energy drift, the bodies' kinds, kinetic energies and degrees of freedom) is in
+``tests/python/rigidtesting``, which this module puts on Python's path.
 
 Each benchmark is a program ``python benchmarks/<name>.py``; the folder of the script is on Python's
 path then, so ``import benchmarking`` finds this file.
@@ -33,6 +34,8 @@ from openmm import unit
 
 import openmmrigid
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, "tests", "python"))  # rigidtesting
+from rigidtesting.bodies import (bodyKind, bodyKinds, integratorBodies, kineticEnergies, principalMoments,  # noqa: F401
+                                 rigidDegreesOfFreedom, rigidKineticEnergies, systemMasses)
 from rigidtesting.stress import block_drift
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -448,14 +451,8 @@ def principalKineticEnergies(positions, velocities, masses, molecules):
 
 
 # ---------------------------------------------------------------------------------------------------
-# Rigid bodies: what the integrators do not report (issue 41's lean API), computed from the System,
-# the State and the integrator's bodies
-
-#: A body is linear when its smallest principal moment of inertia is below this fraction of its
-#: largest; two moments are equal (a spherical or symmetric top) within this fraction of the largest.
-#: (The integrators' own classification is stricter on equal moments, and puts a body whose particles
-#: lie within 0.002 nm of its axis on the axis: a nearly linear molecule is linear there, not here.)
-KIND_TOLERANCE = 1e-8
+# Rigid bodies: what the integrators do not report (their kinds, kinetic-energy split and degrees of
+# freedom: rigidtesting.bodies, imported above, computes them from the State)
 
 #: Force evaluations per step of each splitting of RigidBodyIntegrator.setSplitting().
 FORCE_EVALUATIONS = {openmmrigid.RigidBodyIntegrator.Verlet: 1, openmmrigid.RigidBodyIntegrator.Omelyan2: 2,
@@ -472,155 +469,6 @@ def accuracyWarnings(caught):
     warnings.catch_warnings(record=True) (the accuracy check issues one, once, from within the step
     that fired; make it seen each time with warnings.simplefilter("always", openmmrigid.AccuracyWarning))."""
     return [str(w.message) for w in caught if issubclass(w.category, openmmrigid.AccuracyWarning)]
-
-
-def systemMasses(system):
-    """The particle masses of a System (amu), as an array."""
-    return np.array([system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles())])
-
-
-def integratorBodies(integrator):
-    """The bodies of a rigid-body integrator bound to a Context: a list of arrays of particle indices."""
-    return [np.asarray(integrator.getBodyParticles(b), dtype=int) for b in range(integrator.getNumBodies())]
-
-
-def _whole(x, box):
-    """Positions (..., k, 3) of bodies, each particle moved by box vectors (3 x 3, rows; None: not
-    periodic) to the image nearest the body's first particle: whole bodies from wrapped positions."""
-    x = np.array(x, dtype=float)
-    if box is None:
-        return x
-    d = x - x[..., :1, :]
-    for k in (2, 1, 0):
-        d -= np.round(d[..., k]/box[k][k])[..., None]*box[k]
-    return x[..., :1, :] + d
-
-
-def _inertia(masses, positions):
-    """Centres of mass (N, 3), positions relative to them (N, k, 3) and inertia tensors (N, 3, 3) of
-    bodies: masses (N, k), positions (N, k, 3)."""
-    m = masses[..., None]
-    total = np.maximum(m.sum(axis=-2), np.finfo(float).tiny)
-    centre = (m*positions).sum(axis=-2)/total
-    r = positions - centre[..., None, :]
-    inertia = (m[..., None]*(np.einsum("nki,nki->nk", r, r)[..., None, None]*np.eye(3)
-                             - r[..., :, None]*r[..., None, :])).sum(axis=-3)
-    return centre, r, inertia
-
-
-def principalMoments(masses, positions):
-    """The principal moments of inertia (amu nm^2, ascending) of particles (masses in amu, positions
-    (k, 3) in nm, the body whole) about their centre of mass: those of the particles' masses, before
-    any setMinimumMomentOfInertia() raises them (raised: max(I_k, minimum) for each I_k > 0)."""
-    masses = np.asarray(masses, dtype=float)
-    return np.linalg.eigvalsh(_inertia(masses[None], np.asarray(positions, dtype=float)[None])[2])[0]
-
-
-def bodyKind(masses, positions, tolerance=KIND_TOLERANCE):
-    """The kind of a rigid body from its particles' masses (amu) and positions ((k, 3) nm, whole):
-    "point" (one massive particle), "linear", "spherical", "symmetric" or "asymmetric" (KIND_TOLERANCE)."""
-    masses = np.asarray(masses, dtype=float)
-    moments = principalMoments(masses, positions) if np.count_nonzero(masses > 0) > 1 else np.zeros(3)
-    small = tolerance*moments[2]
-    if moments[2] <= 0:
-        return "point"
-    if moments[0] < small:
-        return "linear"
-    equal = (moments[1] - moments[0] <= small, moments[2] - moments[1] <= small)
-    return "spherical" if all(equal) else "symmetric" if any(equal) else "asymmetric"
-
-
-def _stateArrays(context, velocities=False):
-    state = context.getState(getPositions=True, getVelocities=velocities)
-    x = state.getPositions(asNumpy=True).value_in_unit(unit.nanometer)
-    box = (state.getPeriodicBoxVectors(asNumpy=True).value_in_unit(unit.nanometer)
-           if context.getSystem().usesPeriodicBoundaryConditions() else None)
-    v = state.getVelocities(asNumpy=True).value_in_unit(unit.nanometer/unit.picosecond) if velocities else None
-    return x, v, box
-
-
-def bodyKinds(context, integrator, positions=None):
-    """The kind (bodyKind()) of each body of a rigid-body integrator bound to the Context, from the
-    Context's positions, or from `positions` (particles x 3, nm: those the Context was given, exact
-    where a single-precision platform would round them)."""
-    masses = systemMasses(context.getSystem())
-    x, _, box = _stateArrays(context)
-    if positions is not None:
-        x = np.asarray(positions.value_in_unit(unit.nanometer) if unit.is_quantity(positions) else positions, dtype=float)
-    return [bodyKind(masses[body], _whole(x[body], box)) for body in integratorBodies(integrator)]
-
-
-def rigidDegreesOfFreedom(context, integrator):
-    """The degrees of freedom of the System as a rigid-body integrator bound to the Context moves it:
-    3 per free particle (a massive particle in no body) less the constraints among free particles,
-    plus per body 3 translational and 0 (point), 2 (linear) or 3 rotational ones (bodyKind(), from
-    the Context's positions), less 3 if the System has a CMMotionRemover. The temperature is
-    2 KE / (dof k_B), as the integrator's computeSystemTemperature() reads it."""
-    system = context.getSystem()
-    masses = systemMasses(system)
-    free = masses > 0
-    kinds = bodyKinds(context, integrator)
-    for body in integratorBodies(integrator):
-        free[body] = False
-    dof = 3*int(np.count_nonzero(free)) + sum(3 + {"point": 0, "linear": 2}.get(kind, 3) for kind in kinds)
-    for k in range(system.getNumConstraints()):
-        i, j, _ = system.getConstraintParameters(k)
-        dof -= int(free[i] and free[j])
-    if any(isinstance(force, openmm.CMMotionRemover) for force in system.getForces()):
-        dof -= 3
-    return dof
-
-
-def rigidKineticEnergies(positions, velocities, masses, bodies, minimumMoment=0.0, box=None):
-    """Translational and rotational kinetic energy (kJ/mol) of rigid bodies and free particles, as a
-    rigid-body integrator splits them: translational, 1/2 M V^2 of each body's centre of mass plus
-    1/2 m v^2 of each free particle (a massive particle in no body); rotational, 1/2 sum_k I'_k w_k^2
-    of each body about its principal axes, with the angular velocity w of its particles' velocities
-    (rigid motion, v_i = V + w x r_i: w = I^-1 L with the moments I of the masses, none about a
-    linear body's axis) and the moments I' it moves with, raised to minimumMoment
-    (integrator.getMinimumMomentOfInertia()) where nonzero and smaller: so with raised moments the
-    sum is the integrator's (and the State's) kinetic energy, not the particles' 1/2 sum m v^2.
-
-    positions (nm) and velocities (nm/ps): arrays (particles, 3) of a State; masses (amu); bodies: a
-    list of index arrays (integratorBodies()); box: the periodic box vectors (nm, rows) if the
-    positions may be wrapped, else None."""
-    positions, velocities = np.asarray(positions, dtype=float), np.asarray(velocities, dtype=float)
-    masses = np.asarray(masses, dtype=float)
-    minimumMoment = (minimumMoment.value_in_unit(unit.dalton*unit.nanometer**2)
-                     if unit.is_quantity(minimumMoment) else float(minimumMoment))
-    free = masses > 0
-    for body in bodies:
-        free[body] = False
-    translational = 0.5*float(np.sum(masses[free]*np.sum(velocities[free]**2, axis=1)))
-    rotational = 0.0
-    bySize = {}
-    for body in bodies:
-        bySize.setdefault(len(body), []).append(body)
-    for group in bySize.values():
-        group = np.array(group)
-        m = masses[group]                                               # (N, k)
-        x, v = _whole(positions[group], box), velocities[group]         # (N, k, 3)
-        _, r, inertia = _inertia(m, x)
-        total = m.sum(axis=1)
-        speed = np.einsum("nk,nki->ni", m, v)/np.maximum(total, np.finfo(float).tiny)[:, None]
-        translational += 0.5*float(np.sum(total*np.sum(speed**2, axis=1)))
-        angular = np.einsum("nk,nki->ni", m, np.cross(r, v - speed[:, None, :]))
-        moments, axes = np.linalg.eigh(inertia)                         # ascending, axes as columns
-        principal = np.einsum("nij,ni->nj", axes, angular)
-        turning = moments > KIND_TOLERANCE*moments[:, 2:]               # no rotation about a line's axis, nor of a point
-        omega = np.divide(principal, moments, out=np.zeros_like(principal), where=turning)
-        raised = np.where(turning, np.maximum(moments, minimumMoment), 0.0)
-        rotational += 0.5*float(np.sum(raised*omega**2))
-    return translational, rotational
-
-
-def integratorKineticEnergies(context, integrator, bodies=None, masses=None):
-    """rigidKineticEnergies() of the Context's State, with the integrator's bodies and minimum moment
-    (bodies and masses: integratorBodies() and systemMasses(), to spare finding them at every sample)."""
-    x, v, box = _stateArrays(context, velocities=True)
-    return rigidKineticEnergies(x, v, systemMasses(context.getSystem()) if masses is None else masses,
-                                integratorBodies(integrator) if bodies is None else bodies,
-                                integrator.getMinimumMomentOfInertia(), box)
 
 
 # ---------------------------------------------------------------------------------------------------

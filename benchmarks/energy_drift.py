@@ -31,7 +31,7 @@ it) and reports:
   degrees of freedom), computed for every method by the same function from positions, velocities
   and masses (stock Verlet's leapfrog velocities moved on by half a step first), checked against
   the State's kinetic energy and, for the rigid integrators, against the split of their own bodies
-  (benchmarking.rigidKineticEnergies with the integrator's bodies and moments);
+  (rigidtesting.bodies.kineticEnergies with the integrator's bodies and moments);
 - cost: wall time of the step() calls alone, as ms/step, ns/day and seconds per simulated ps.
 
     python benchmarks/energy_drift.py --quick        # a smoke check: TIP3P + TIP4P-Ew, 2/4/6 fs, 1.5 ps per run
@@ -69,7 +69,7 @@ from openmm import unit
 
 import openmmrigid
 from benchmarking import (RESULTS, Progress, ResultsDocument, cpuProperties, forceEvaluations, header,
-                          integratorBodies, openLog, pyplot, rigidDegreesOfFreedom, rigidKineticEnergies as
+                          integratorBodies, openLog, pyplot, rigidDegreesOfFreedom, kineticEnergies as
                           bodyKineticEnergies, say, saveFigure, slopeError, stamp, writeCsv)
 
 plt = pyplot()

@@ -17,7 +17,7 @@ state, for each step size (1, 2, 4, 6, 8 fs by default):
 
 Each run equilibrates for 2 ps of its own, then samples every 4 steps for `--time` ps: the reported
 temperature, the translational and rotational temperatures (3 N degrees of freedom each, from the
-split of the rigid integrators' bodies, benchmarking.rigidKineticEnergies, or for the stock integrator
+split of the rigid integrators' bodies, rigidtesting.bodies.rigidKineticEnergies, or for the stock integrator
 from the molecules' centre-of-mass velocities), and the potential energy per molecule. Errors:
 standard errors of 20 block means.
 
@@ -38,7 +38,7 @@ import openmm
 from openmm import app, unit
 
 import openmmrigid
-from benchmarking import (RESULTS, blockMean, integratorBodies, integratorKineticEnergies, molecularKineticEnergies, openRun,
+from benchmarking import (RESULTS, blockMean, integratorBodies, rigidKineticEnergies, molecularKineticEnergies, openRun,
                           say, stamp, writeCsv)
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, "tests", "python"))  # rigidtesting
 import rigidtesting
@@ -78,10 +78,10 @@ def makeIntegrator(kind, stepFs, seed):
 
 def kineticParts(context, integrator, masses, molecules, bodies):
     """Translational and rotational kinetic energy (kJ/mol): for a rigid integrator the split of its
-    bodies (`bodies`, benchmarking.integratorKineticEnergies), else the molecules' centre-of-mass
+    bodies (`bodies`, rigidtesting.bodies.rigidKineticEnergies), else the molecules' centre-of-mass
     motion and the rest."""
     if bodies is not None:
-        return integratorKineticEnergies(context, integrator, bodies, masses)
+        return rigidKineticEnergies(context, integrator, bodies, masses)
     velocities = context.getState(getVelocities=True).getVelocities(asNumpy=True)
     return molecularKineticEnergies(velocities.value_in_unit(unit.nanometer/unit.picosecond), masses, molecules)
 

@@ -1,15 +1,15 @@
-"""What the tests measure of the bodies, computed from the State alone (masses, positions, velocities):
-independent of the integrator's own sums, which are not public.
+"""What the tests and benchmarks measure of the bodies, computed from the State alone (masses, positions,
+velocities), independently of the integrator's own sums, which are not public.
 
 principalMoments(masses, positions)
     The principal moments of inertia about the centre of mass, ascending (amu nm^2).
-bodyKind(masses, positions)
-    "point", "linear", "spherical", "symmetric" or "asymmetric", as the integrator classifies a body (a
-    body within 0.002 nm of its axis and 1 % of its length is linear; moments within 1e-10, relative,
-    are equal).
-rigidKineticEnergies(context, integrator)
+bodyKind(masses, positions), bodyKinds(context, integrator)
+    "point", "linear", "spherical", "symmetric" or "asymmetric", as the integrator classifies a body (one
+    within 0.002 nm of its axis and 1 % of its length is linear; moments within 1e-10, relative, are equal).
+kineticEnergies(positions, velocities, masses, bodies, minimumMoment, box), rigidKineticEnergies(context, integrator)
     The translational (bodies' centres of mass and free particles) and rotational kinetic energy (kJ/mol)
-    of the State's velocities, the rotation in the bodies' raised moments.
+    of velocities that are rigid motion, the rotation in the bodies' raised moments: numpy over all the
+    bodies of one size at once.
 rigidDegreesOfFreedom(context, integrator)
     The degrees of freedom as the integrator moves the system (what computeSystemTemperature() divides by).
 """
@@ -19,113 +19,147 @@ import openmm
 from openmm import unit
 
 LINEAR_TOLERANCE = 0.002  # nm: RigidBodySystem::LinearTolerance
-EQUAL_MOMENTS = 1e-10     # relative
+EQUAL_MOMENTS = 1e-10     # relative to the largest moment; below it a moment is zero
+
+
+def systemMasses(system):
+    """The particle masses of a System (amu), as an array."""
+    return np.array([system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles())])
+
+
+def integratorBodies(integrator):
+    """The bodies of a rigid-body integrator bound to a Context: a list of arrays of particle indices."""
+    return [np.asarray(integrator.getBodyParticles(b), dtype=int) for b in range(integrator.getNumBodies())]
+
+
+def _whole(positions, box):
+    """Positions (..., k, 3) of bodies with each particle at the image nearest the body's first (box: rows
+    of the periodic box vectors, or None)."""
+    positions = np.array(positions, dtype=float)
+    if box is None:
+        return positions
+    delta = positions - positions[..., :1, :]
+    for k in (2, 1, 0):
+        delta -= np.round(delta[..., k] / box[k][k])[..., None] * box[k]
+    return positions[..., :1, :] + delta
 
 
 def _inertia(masses, positions):
-    masses = np.asarray(masses, dtype=float)
-    positions = np.asarray(positions, dtype=float)
-    relative = positions - masses @ positions / masses.sum()
-    tensor = np.einsum("i,ij,ik->jk", masses, relative, relative)
-    return np.trace(tensor) * np.eye(3) - tensor, relative
+    """Positions relative to the centre of mass (..., k, 3) and inertia tensors (..., 3, 3) of bodies:
+    masses (..., k), positions (..., k, 3)."""
+    m = np.asarray(masses, dtype=float)[..., None]
+    centre = (m * positions).sum(axis=-2) / m.sum(axis=-2)
+    r = positions - centre[..., None, :]
+    outer = (m[..., None] * r[..., :, None] * r[..., None, :]).sum(axis=-3)
+    return r, np.trace(outer, axis1=-2, axis2=-1)[..., None, None] * np.eye(3) - outer
 
 
 def principalMoments(masses, positions):
-    """The principal moments of inertia about the centre of mass, ascending."""
+    """The principal moments of inertia about the centre of mass (the body whole), ascending."""
     if len(masses) == 1:
         return np.zeros(3)
-    return np.linalg.eigvalsh(_inertia(masses, positions)[0])
-
-
-def _isLinear(masses, positions):
-    inertia, relative = _inertia(masses, positions)
-    axes = np.linalg.eigh(inertia)[1]
-    along = relative @ axes[:, 0]
-    offAxis = np.linalg.norm(relative - np.outer(along, axes[:, 0]), axis=1).max()
-    return offAxis <= LINEAR_TOLERANCE and offAxis <= 0.01 * np.abs(along).max()
+    return np.linalg.eigvalsh(_inertia(masses, np.asarray(positions, dtype=float))[1])
 
 
 def bodyKind(masses, positions):
-    """The kind of a body with these particles, as the integrator names it."""
-    if len(masses) == 1 or np.ptp(np.asarray(positions, dtype=float), axis=0).max() == 0.0:
+    """The kind of a body with these particles (the body whole), as the integrator names it."""
+    positions = np.asarray(positions, dtype=float)
+    if len(masses) == 1 or np.ptp(positions, axis=0).max() == 0.0:
         return "point"
-    if _isLinear(masses, positions):
+    relative, inertia = _inertia(masses, positions)
+    moments, axes = np.linalg.eigh(inertia)
+    along = relative @ axes[:, 0]
+    offAxis = np.linalg.norm(relative - np.outer(along, axes[:, 0]), axis=1).max()
+    if offAxis <= LINEAR_TOLERANCE and offAxis <= 0.01 * np.abs(along).max():
         return "linear"
-    moments = principalMoments(masses, positions)
     close = [abs(moments[k + 1] - moments[k]) <= EQUAL_MOMENTS * moments[2] for k in range(2)]
     if all(close):
         return "spherical"
     return "symmetric" if any(close) else "asymmetric"
 
 
-def _state(context):
-    state = context.getState(getPositions=True, getVelocities=True)
-    positions = state.getPositions(asNumpy=True).value_in_unit(unit.nanometer)
-    velocities = state.getVelocities(asNumpy=True).value_in_unit(unit.nanometer / unit.picosecond)
-    box = state.getPeriodicBoxVectors(asNumpy=True).value_in_unit(unit.nanometer)
-    return positions, velocities, box
+def _stateArrays(context, velocities=False):
+    """Positions, velocities (if asked) and box (None if not periodic) of the Context's State, as arrays."""
+    state = context.getState(getPositions=True, getVelocities=velocities)
+    x = state.getPositions(asNumpy=True).value_in_unit(unit.nanometer)
+    v = state.getVelocities(asNumpy=True).value_in_unit(unit.nanometer / unit.picosecond) if velocities else None
+    box = (state.getPeriodicBoxVectors(asNumpy=True).value_in_unit(unit.nanometer)
+           if context.getSystem().usesPeriodicBoundaryConditions() else None)
+    return x, v, box
 
 
-def _whole(positions, box, periodic):
-    """A body's positions with every particle at the image nearest the first (bodies are small)."""
-    if not periodic:
-        return positions
-    delta = positions - positions[0]
-    for k in (2, 1, 0):
-        delta -= np.outer(np.round(delta[:, k] / box[k][k]), box[k])
-    return positions[0] + delta
+def bodyKinds(context, integrator, positions=None):
+    """The kind of each body of a rigid-body integrator bound to the Context, from the Context's positions or
+    from `positions` (particles x 3, nm, a Quantity or not: those the Context was given, exact where a
+    single-precision platform would round them)."""
+    masses = systemMasses(context.getSystem())
+    x, _, box = _stateArrays(context)
+    if positions is not None:
+        x = np.asarray(positions.value_in_unit(unit.nanometer) if unit.is_quantity(positions) else positions, dtype=float)
+    return [bodyKind(masses[body], _whole(x[body], box)) for body in integratorBodies(integrator)]
 
 
-def _bodies(context, integrator):
-    system = context.getSystem()
-    masses = np.array([system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles())])
-    bodies = [np.array(integrator.getBodyParticles(b)) for b in range(integrator.getNumBodies())]
-    inBody = np.zeros(len(masses), dtype=bool)
+def kineticEnergies(positions, velocities, masses, bodies, minimumMoment=0.0, box=None):
+    """(translational, rotational) kinetic energy in kJ/mol of rigid motion: translational, 1/2 M V^2 of each
+    body's centre of mass plus 1/2 m v^2 of each free massive particle; rotational, 1/2 sum_k I'_k w_k^2 of
+    each body, with the angular velocity w of its particles' velocities (w_k = L_k / I_k about the principal
+    axes of the particles' masses; none about a linear body's axis) and the moments I'_k it moves with,
+    raised to minimumMoment (amu nm^2, a Quantity or not) where nonzero and smaller. With raised moments
+    the sum is the integrator's (and the State's) kinetic energy, not 1/2 sum m v^2.
+
+    positions (nm), velocities (nm/ps): arrays (particles, 3); masses (amu); bodies: index arrays; box: the
+    periodic box vectors (rows, nm) where the positions may be wrapped, else None."""
+    positions, velocities = np.asarray(positions, dtype=float), np.asarray(velocities, dtype=float)
+    masses = np.asarray(masses, dtype=float)
+    if unit.is_quantity(minimumMoment):
+        minimumMoment = minimumMoment.value_in_unit(unit.dalton * unit.nanometer**2)
+    free = masses > 0
+    bySize = {}
     for body in bodies:
-        inBody[body] = True
-    free = np.flatnonzero(~inBody & (masses > 0.0))
-    return system, masses, bodies, free
-
-
-def rigidKineticEnergies(context, integrator):
-    """(translational, rotational) kinetic energy in kJ/mol of the State's velocities, each body's rotation
-    in its moments raised to integrator.getMinimumMomentOfInertia()."""
-    system, masses, bodies, free = _bodies(context, integrator)
-    positions, velocities, box = _state(context)
-    floor = integrator.getMinimumMomentOfInertia().value_in_unit(unit.amu * unit.nanometer**2)
-    periodic = system.usesPeriodicBoundaryConditions()
+        free[body] = False
+        bySize.setdefault(len(body), []).append(body)
     translational = 0.5 * float(np.sum(masses[free] * np.sum(velocities[free]**2, axis=1)))
     rotational = 0.0
-    for body in bodies:
-        m = masses[body]
-        v = velocities[body]
-        centreVelocity = m @ v / m.sum()
-        translational += 0.5 * m.sum() * float(centreVelocity @ centreVelocity)
-        if len(body) == 1:
+    for group in bySize.values():
+        group = np.array(group)
+        m, v = masses[group], velocities[group]                              # (N, k), (N, k, 3)
+        total = m.sum(axis=1)
+        speed = np.einsum("nk,nki->ni", m, v) / total[:, None]
+        translational += 0.5 * float(np.sum(total * np.sum(speed**2, axis=1)))
+        if group.shape[1] == 1:
             continue
-        inertia, relative = _inertia(m, _whole(positions[body], box, periodic))
-        angularMomentum = np.sum(m[:, None] * np.cross(relative, v - centreVelocity), axis=0)
-        moments, axes = np.linalg.eigh(inertia)
-        bodyMomentum = axes.T @ angularMomentum
-        # The angular velocity of the particles' motion (none along a linear body's axis), and the energy
-        # of that angular velocity in the raised moments.
-        omega = np.array([bodyMomentum[k] / moments[k] if moments[k] > 1e-10 * moments[2] else 0.0 for k in range(3)])
-        raised = np.where(moments > 1e-10 * moments[2], np.maximum(moments, floor), 0.0)
-        rotational += 0.5 * float(np.sum(raised * omega**2))
+        r, inertia = _inertia(m, _whole(positions[group], box))
+        angular = np.einsum("nk,nki->ni", m, np.cross(r, v - speed[:, None, :]))
+        moments, axes = np.linalg.eigh(inertia)                              # ascending, axes as columns
+        principal = np.einsum("nij,ni->nj", axes, angular)
+        turning = moments > EQUAL_MOMENTS * moments[:, 2:]
+        omega = np.divide(principal, moments, out=np.zeros_like(principal), where=turning)
+        rotational += 0.5 * float(np.sum(np.where(turning, np.maximum(moments, minimumMoment), 0.0) * omega**2))
     return translational, rotational
+
+
+def rigidKineticEnergies(context, integrator, bodies=None, masses=None):
+    """kineticEnergies() of the Context's State with the integrator's bodies and minimum moment (bodies and
+    masses: integratorBodies() and systemMasses(), to spare finding them at every sample)."""
+    x, v, box = _stateArrays(context, velocities=True)
+    return kineticEnergies(x, v, systemMasses(context.getSystem()) if masses is None else masses,
+                           integratorBodies(integrator) if bodies is None else bodies,
+                           integrator.getMinimumMomentOfInertia(), box)
 
 
 def rigidDegreesOfFreedom(context, integrator):
     """3 per free particle less one per constraint between free particles, 3 + (0, 2 or 3) per body (one
     particle, linear, other), less 3 with a CMMotionRemover."""
-    system, masses, bodies, free = _bodies(context, integrator)
-    positions, _, box = _state(context)
-    freeSet = set(free.tolist())
-    dof = 3 * len(free) - sum(1 for c in range(system.getNumConstraints())
-                              if set(system.getConstraintParameters(c)[:2]) <= freeSet)
-    for body in bodies:
-        kind = bodyKind(masses[body], _whole(positions[body], box, system.usesPeriodicBoundaryConditions()))
-        dof += 3 + {"point": 0, "linear": 2}.get(kind, 3)
+    system = context.getSystem()
+    masses = systemMasses(system)
+    free = masses > 0
+    for body in integratorBodies(integrator):
+        free[body] = False
+    dof = 3 * int(np.count_nonzero(free))
+    dof += sum(3 + {"point": 0, "linear": 2}.get(kind, 3) for kind in bodyKinds(context, integrator))
+    for c in range(system.getNumConstraints()):
+        i, j, _ = system.getConstraintParameters(c)
+        dof -= int(free[i] and free[j])
     if any(isinstance(force, openmm.CMMotionRemover) for force in system.getForces()):
         dof -= 3
     return dof
