@@ -4,14 +4,16 @@
   harmonic trap computed by an openmm.PythonForce, which records every configuration at which the
   integrator evaluates forces; a reimplementation here (kicks, drifts with openmmrigid.FreeRotor,
   each scheme written the way its paper writes it) must evaluate the forces at the same
-  configurations, the same number of times (getNumForceEvaluations() per step), and end in the same
-  state, to 1e-12;
+  configurations, the same number of times (1, 2, 3 and 4 per step for Verlet, Omelyan2, Yoshida4 and
+  Omelyan4), and end in the same state, to 1e-12; RigidBodyBussiIntegrator runs the same stages, then
+  rescales all velocities by one factor;
 - a CMMotionRemover (which changes velocities without telling the integrator) leaves the trajectory
   of a cluster with no net momentum unchanged for every splitting;
 - on a box of rigid TIP3P water (PME, 2 fs) the total energy of Omelyan2 fluctuates less than half
   as much as Verlet's (Omelyan, Mryglod and Folk's optimized scheme);
 - the API: constants, defaults, errors naming the bad value; copies and serialization keep the
-  splitting (versions of the XML format: TestSerialization.cpp).
+  splitting, in RigidBodyIntegrator and RigidBodyBussiIntegrator (versions of the XML format:
+  TestSerialization.cpp).
 
 Each splitting's order, exact free motion, time reversal, conservation of momentum and constraints
 among free particles (Yoshida4 fourth order with them) are tested in C++, tests/TestRigidBodyIntegrator.h,
@@ -26,11 +28,12 @@ import pytest
 
 import openmmrigid
 import systems
-from openmmrigid import FreeRotor, RigidBodyIntegrator
+from openmmrigid import FreeRotor, RigidBodyBussiIntegrator, RigidBodyIntegrator
 
 PLATFORMS = ["Reference", "CPU"]
 SPLITTINGS = {"Verlet": RigidBodyIntegrator.Verlet, "Omelyan2": RigidBodyIntegrator.Omelyan2,
               "Yoshida4": RigidBodyIntegrator.Yoshida4, "Omelyan4": RigidBodyIntegrator.Omelyan4}
+#: Force evaluations per step (the scheme's kicks, adjacent ones of consecutive steps merged).
 FORCE_EVALUATIONS = {"Verlet": 1, "Omelyan2": 2, "Yoshida4": 3, "Omelyan4": 4}
 
 # ------------------------------------------------------------------------------------------------
@@ -181,15 +184,9 @@ class ReimplementedStep:
         return self.velocities
 
 
-@pytest.mark.parametrize("name", list(SPLITTINGS))
-@pytest.mark.parametrize("platform", PLATFORMS)
-def test_stage_sequence(platform, name):
-    """The integrator evaluates the forces at exactly the configurations (to 1e-12 nm), and exactly as
-    often (1 + steps x getNumForceEvaluations()), as the scheme written out from its paper, and ends in
-    the same positions and velocities. The configurations include the virtual site, so a force
-    evaluation before the site is placed would show; a second PythonForce outside the integration
-    force groups is never evaluated by step()."""
-    dt, steps = 0.01, 4
+def pinned_system():
+    """The trap system of the pinning tests, with its two recording PythonForces: (system, recorder of
+    the trap, recorder of a second force outside the integration force groups)."""
     system = openmm.System()
     for mass in PIN_MASSES:
         system.addParticle(mass)
@@ -200,10 +197,28 @@ def test_stage_sequence(platform, name):
     other.setForceGroup(1)
     system.addForce(trap)
     system.addForce(other)
+    return system, recorder, outside
+
+
+def assert_configurations(evaluated, expected):
+    for k, (actual, reference) in enumerate(zip(evaluated, expected)):
+        error = np.max(np.abs(actual - reference))
+        assert error < 1e-12, f"force evaluation {k}: configuration off by {error:.3g} nm"
+
+
+@pytest.mark.parametrize("name", list(SPLITTINGS))
+@pytest.mark.parametrize("platform", PLATFORMS)
+def test_stage_sequence(platform, name):
+    """The integrator evaluates the forces at exactly the configurations (to 1e-12 nm), and exactly as
+    often (1 + steps x FORCE_EVALUATIONS), as the scheme written out from its paper, and ends in
+    the same positions and velocities. The configurations include the virtual site, so a force
+    evaluation before the site is placed would show; a second PythonForce outside the integration
+    force groups is never evaluated by step()."""
+    dt, steps = 0.01, 4
+    system, recorder, outside = pinned_system()
     integrator = RigidBodyIntegrator(dt, [PIN_BODY])
     integrator.setSplitting(SPLITTINGS[name])
     integrator.setIntegrationForceGroups({0})
-    assert integrator.getNumForceEvaluations() == FORCE_EVALUATIONS[name]
     context = systems.make_context(system, integrator, platform)
     velocities = pin_velocities()
     context.setPositions(PIN_POSITIONS)
@@ -219,12 +234,53 @@ def test_stage_sequence(platform, name):
             getattr(reference, kind)(fraction * dt)
     assert len(evaluated) == 1 + steps * FORCE_EVALUATIONS[name] == len(reference.configurations)
     assert outside.configurations == []
-    for k, (actual, expected) in enumerate(zip(evaluated, reference.configurations)):
-        error = np.max(np.abs(actual - expected))
-        assert error < 1e-12, f"force evaluation {k}: configuration off by {error:.3g} nm"
+    assert_configurations(evaluated, reference.configurations)
     assert np.max(np.abs(evaluated[-1] - PIN_POSITIONS)) > 0.01  # the test means something only if they moved
     assert np.max(np.abs(systems.positions_of(context) - reference.positions)) < 1e-12
     assert np.max(np.abs(systems.velocities_of(context) - reference.rigidVelocities())) < 1e-11
+
+
+@pytest.mark.parametrize("name", list(SPLITTINGS))
+@pytest.mark.parametrize("platform", PLATFORMS)
+def test_bussi_stage_sequence(platform, name):
+    """RigidBodyBussiIntegrator runs the same splitting, then rescales every velocity by one factor
+    (tau = 2 dt, so the factors differ from 1 by far more than the tolerance): each of 4 steps,
+    written out from the state before it, evaluates the forces at the same configurations, as often
+    (none again after the rescaling, which moves nothing), and ends at the same positions, with the
+    reference's velocities times one common factor (to 1e-11 nm/ps)."""
+    dt, steps = 0.01, 4
+    system, recorder, outside = pinned_system()
+    integrator = RigidBodyBussiIntegrator(300, 2 * dt, dt, [PIN_BODY])
+    integrator.setRandomNumberSeed(5)
+    integrator.setSplitting(SPLITTINGS[name])
+    integrator.setIntegrationForceGroups({0})
+    context = systems.make_context(system, integrator, platform)
+    context.setPositions(PIN_POSITIONS)
+    context.setVelocities(pin_velocities())
+    recorder.configurations.clear()
+    massive = np.flatnonzero(PIN_MASSES > 0)
+    factors = []
+    for step in range(steps):
+        positions, velocities = systems.positions_of(context), systems.velocities_of(context)
+        velocities[5] = SITE_WEIGHTS @ velocities[PIN_BODY]
+        start = len(recorder.configurations)
+        integrator.step(1)
+        reference = ReimplementedStep(positions, velocities)
+        if step > 0:  # the forces at the start of this step are those at the end of the last
+            reference.forces = trap_forces_on_massive(positions)
+        for kind, fraction in paper_operations(name):
+            getattr(reference, kind)(fraction * dt)
+        evaluated = recorder.configurations[start:]
+        assert len(evaluated) == len(reference.configurations) == FORCE_EVALUATIONS[name] + (step == 0)
+        assert_configurations(evaluated, reference.configurations)
+        assert np.max(np.abs(systems.positions_of(context) - reference.positions)) < 1e-12
+        expected, actual = reference.rigidVelocities()[massive], systems.velocities_of(context)[massive]
+        factor = np.sum(actual * expected) / np.sum(expected * expected)
+        assert np.max(np.abs(actual - factor * expected)) < 1e-11, step
+        factors.append(factor)
+    assert outside.configurations == []
+    assert np.max(np.abs(np.array(factors) - 1)) > 1e-3, factors  # the thermostat did rescale
+    assert np.max(np.abs(recorder.configurations[-1] - PIN_POSITIONS)) > 0.01
 
 
 # ------------------------------------------------------------------------------------------------
@@ -296,13 +352,12 @@ def test_omelyan2_fluctuates_less_than_verlet_in_water():
 def test_constants_and_defaults():
     assert (RigidBodyIntegrator.Verlet, RigidBodyIntegrator.Omelyan2, RigidBodyIntegrator.Yoshida4,
             RigidBodyIntegrator.Omelyan4) == (0, 1, 2, 3)
-    integrator = RigidBodyIntegrator(0.002)
-    assert integrator.getSplitting() == RigidBodyIntegrator.Verlet
-    assert integrator.getNumForceEvaluations() == 1
-    for name, value in SPLITTINGS.items():
-        integrator.setSplitting(value)
-        assert integrator.getSplitting() == value
-        assert integrator.getNumForceEvaluations() == FORCE_EVALUATIONS[name]
+    for integrator in (RigidBodyIntegrator(0.002), RigidBodyBussiIntegrator(300, 0.1, 0.002)):
+        assert integrator.getSplitting() == RigidBodyIntegrator.Verlet
+        for name, value in SPLITTINGS.items():
+            integrator.setSplitting(value)
+            assert integrator.getSplitting() == value
+    assert not hasattr(RigidBodyIntegrator(0.002), "getNumForceEvaluations")  # FORCE_EVALUATIONS says it
 
 
 def test_unknown_splitting():
@@ -318,27 +373,38 @@ def test_unknown_splitting():
     assert integrator.getSplitting() == RigidBodyIntegrator.Omelyan2
 
 
+@pytest.mark.parametrize("cls", [RigidBodyIntegrator, RigidBodyBussiIntegrator])
 @pytest.mark.parametrize("how", systems.COPY_METHODS)
 @pytest.mark.parametrize("name", list(SPLITTINGS))
-def test_copies_keep_the_splitting(name, how):
-    original = RigidBodyIntegrator(0.002, [[0, 1, 2]])
+def test_copies_keep_the_splitting(name, how, cls):
+    bodies = [[0, 1, 2]]
+    original = RigidBodyIntegrator(0.002, bodies) if cls is RigidBodyIntegrator else RigidBodyBussiIntegrator(300, 0.1, 0.002, bodies)
     original.setSplitting(SPLITTINGS[name])
     original.setRotationMethod(RigidBodyIntegrator.NoSquish)
     duplicate = systems.copy_integrator(original, how)
-    assert type(duplicate) is RigidBodyIntegrator
+    assert type(duplicate) is cls
     assert duplicate.getSplitting() == SPLITTINGS[name]
-    assert duplicate.getNumForceEvaluations() == FORCE_EVALUATIONS[name]
     assert duplicate.getRotationMethod() == RigidBodyIntegrator.NoSquish
+    assert openmm.XmlSerializer.serialize(duplicate) == openmm.XmlSerializer.serialize(original)
 
 
 def test_xml_writes_the_splitting():
     integrator = RigidBodyIntegrator(0.002)
     integrator.setSplitting(RigidBodyIntegrator.Yoshida4)
     xml = openmm.XmlSerializer.serialize(integrator)
-    assert 'version="4"' in xml and 'splitting="2"' in xml
+    assert 'version="5"' in xml and 'splitting="2"' in xml
+    bussi = RigidBodyBussiIntegrator(300, 0.1, 0.002)
+    bussi.setSplitting(RigidBodyIntegrator.Omelyan4)
+    xml = openmm.XmlSerializer.serialize(bussi)
+    assert 'type="RigidBodyBussiIntegrator"' in xml and 'version="1"' in xml and 'splitting="3"' in xml
+    assert openmmrigid.deserializeIntegrator(xml).getSplitting() == RigidBodyIntegrator.Omelyan4
 
 
 def test_bad_splitting_in_xml():
     xml = '<?xml version="1.0" ?>\n<Integrator splitting="9" stepSize=".002" type="RigidBodyIntegrator" version="2"/>\n'
+    with pytest.raises(openmm.OpenMMException, match="unknown splitting 9"):
+        openmmrigid.deserializeIntegrator(xml)
+    xml = ('<?xml version="1.0" ?>\n<Integrator collisionTime=".1" splitting="9" stepSize=".002" temperature="300" '
+           'type="RigidBodyBussiIntegrator" version="1"/>\n')
     with pytest.raises(openmm.OpenMMException, match="unknown splitting 9"):
         openmmrigid.deserializeIntegrator(xml)

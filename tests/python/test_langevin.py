@@ -9,9 +9,13 @@ platforms: seeds, friction 0 as leapfrog Verlet, exact damping at temperature 0,
   linear bodies;
 - Simulation checkpoints continue a trajectory (its random numbers too);
 - bad temperatures and frictions raise openmm.OpenMMException and leave the Context usable;
-- construction from floats and Quantities, the getters' units, pickle, copy, deepcopy,
-  XmlSerializer and deserializeIntegrator keep every setting and give back the right class; the
-  integrator in app.Simulation with StateDataReporter and a MonteCarloBarostat.
+- construction from floats and Quantities, the getters' units; pickle, copy, deepcopy and
+  deserializeIntegrator keep every setting and give back the right class (openmm.XmlSerializer
+  gives back an openmm.Integrator that runs ours and keeps every setting); the integrator in
+  app.Simulation with StateDataReporter and a MonteCarloBarostat.
+
+The kinetic energies, degrees of freedom and body kinds are computed from the State
+(rigidtesting.bodies), independently of the integrator's own sums.
 """
 
 import io
@@ -27,6 +31,7 @@ import openmmrigid
 import systems
 from systems import COPY_METHODS, copy_integrator
 from openmmrigid import RigidBodyIntegrator, RigidBodyIntegratorBase, RigidBodyLangevinIntegrator
+from rigidtesting.bodies import bodyKind, rigidDegreesOfFreedom, rigidKineticEnergies
 from test_integrator_api import EXPLICIT_BODIES, MASSES, POSITIONS, platform, topology_for, trapped_system
 
 PLATFORMS = ["Reference", "CPU"]
@@ -34,11 +39,11 @@ BOLTZMANN = unit.MOLAR_GAS_CONSTANT_R.value_in_unit(unit.kilojoule_per_mole / un
 
 
 def settings(integrator):
-    """Every setting a copy must keep."""
+    """Every setting a copy must keep (the bodies, explicit or not, through the XML, which writes them)."""
     return (integrator.getTemperature(), integrator.getFriction(), integrator.getRandomNumberSeed(),
             integrator.getStepSize(), integrator.getConstraintTolerance(), integrator.getIntegrationForceGroups(),
-            integrator.getRotationMethod(), integrator.getMinimumMomentOfInertia(), integrator.hasExplicitBodies(), integrator.getExplicitBodies(),
-            integrator.getMeasureShadowWork(), integrator.getMeasureHeat(), integrator.getAccuracyCheck())
+            integrator.getRotationMethod(), integrator.getMinimumMomentOfInertia(), integrator.getMeasureShadowWork(),
+            integrator.getAccuracyCheck(), openmm.XmlSerializer.serialize(integrator))
 
 
 def configured(bodies):
@@ -51,7 +56,6 @@ def configured(bodies):
     integrator.setRotationMethod(RigidBodyLangevinIntegrator.NoSquish)
     integrator.setMinimumMomentOfInertia(0.0125)
     integrator.setMeasureShadowWork(True)
-    integrator.setMeasureHeat(True)
     integrator.setAccuracyCheck(False)
     return integrator
 
@@ -73,18 +77,20 @@ def small_water_box():
     return systems.small_water_box(500)
 
 
-def assert_water_temperatures(integrator, target, samples, every, blocks, label="", tolerance=None):
-    """Sample the translational and rotational kinetic energies of the rigid waters every `every`
-    steps, `samples` times, and check each temperature (3 N degrees of freedom each) and the
-    temperature StateDataReporter reads (computeSystemTemperature()): its block standard error below
-    1 % of the target (so that the test can see a bias of a few percent), and the mean within 4.5 of
-    those errors of the target and, if given, within `tolerance` (relative) of it."""
+def assert_water_temperatures(integrator, target, samples, every, blocks, label="", tolerance=None, *, context):
+    """Sample the translational and rotational kinetic energies of the rigid waters (from the State of
+    `context`, the integrator's Context: rigidtesting.bodies.rigidKineticEnergies) every `every` steps,
+    `samples` times, and check each temperature (3 N degrees of freedom each) and the temperature
+    StateDataReporter reads (computeSystemTemperature()): its block standard error below 1 % of the
+    target (so that the test can see a bias of a few percent), and the mean within 4.5 of those
+    errors of the target and, if given, within `tolerance` (relative) of it."""
     numWaters = integrator.getNumBodies()
     translational, rotational, reported = [], [], []
     for _ in range(samples):
         integrator.step(every)
-        translational.append(integrator.getTranslationalKineticEnergy().value_in_unit(unit.kilojoule_per_mole))
-        rotational.append(integrator.getRotationalKineticEnergy().value_in_unit(unit.kilojoule_per_mole))
+        parts = rigidKineticEnergies(context, integrator)
+        translational.append(parts[0])
+        rotational.append(parts[1])
         reported.append(integrator.computeSystemTemperature().value_in_unit(unit.kelvin))
     for name, temperatures in (("translational", 2 * np.asarray(translational) / (3 * numWaters * BOLTZMANN)),
                                ("rotational", 2 * np.asarray(rotational) / (3 * numWaters * BOLTZMANN)),
@@ -127,8 +133,12 @@ def test_water_reaches_the_bath_temperature(small_water_box):
     target = 300.0
     context, integrator = equilibrated_langevin(small_water_box, target, friction=50, stepFs=1, seed=11, steps=1000)
     numWaters = integrator.getNumBodies()
-    assert numWaters == system.getNumParticles() // 3 and integrator.getNumDegreesOfFreedom() == 6 * numWaters
-    assert_water_temperatures(integrator, target, samples=5000, every=2, blocks=20)
+    assert numWaters == system.getNumParticles() // 3 and rigidDegreesOfFreedom(context, integrator) == 6 * numWaters
+    # The temperature the integrator reports divides by the same degrees of freedom.
+    kinetic = context.getState(getEnergy=True).getKineticEnergy().value_in_unit(unit.kilojoule_per_mole)
+    assert integrator.computeSystemTemperature().value_in_unit(unit.kelvin) == pytest.approx(
+        2 * kinetic / (6 * numWaters * BOLTZMANN), rel=1e-6)
+    assert_water_temperatures(integrator, target, samples=5000, every=2, blocks=20, context=context)
 
 
 def test_water_temperature_reads_right_at_4_fs(small_water_box):
@@ -139,7 +149,8 @@ def test_water_temperature_reads_right_at_4_fs(small_water_box):
     Friction 20/ps; samples 8 fs apart, 20 blocks of 2 ps."""
     target = 300.0
     context, integrator = equilibrated_langevin(small_water_box, target, friction=20, stepFs=4, seed=13, steps=500)
-    assert_water_temperatures(integrator, target, samples=5000, every=2, blocks=20, label="4 fs: ", tolerance=0.015)
+    assert_water_temperatures(integrator, target, samples=5000, every=2, blocks=20, label="4 fs: ", tolerance=0.015,
+                              context=context)
 
 
 # ------------------------------------------------------------------------------------------------
@@ -149,7 +160,7 @@ def test_water_temperature_reads_right_at_4_fs(small_water_box):
 def test_kinetic_energy_distribution_is_canonical():
     """Free bodies of every kind and free atoms without forces: the free motion keeps each body's
     kinetic energy and the Ornstein-Uhlenbeck step keeps the canonical momenta, so the total kinetic
-    energy is Gamma(dof/2, kT) distributed (dof = getNumDegreesOfFreedom()), the rotational energy of
+    energy is Gamma(dof/2, kT) distributed (dof counted from the bodies' kinds), the rotational energy of
     an asymmetric body Gamma(3/2, kT) and of a linear body Gamma(1, kT), exactly. Samples are 4 steps
     apart at friction dt = 0.5 (correlation of the energy c^8 = 0.02: independent), the rotational
     ones pooled over bodies of a kind. Kolmogorov-Smirnov at the 0.1 % level (fixed seed); a noise
@@ -163,8 +174,10 @@ def test_kinetic_energy_distribution_is_canonical():
     context.setPositions(cluster.positions)
     context.setVelocities(cluster.velocities)
     integrator.step(10)
-    dof = integrator.getNumDegreesOfFreedom()
-    kinds = [integrator.getBodyKind(b) for b in range(integrator.getNumBodies())]
+    dof = rigidDegreesOfFreedom(context, integrator)
+    positions = systems.positions_of(context)
+    kinds = [bodyKind(cluster.masses[body], positions[body]) for body in cluster.bodies]
+    assert {"asymmetric", "linear"} <= set(kinds)
     total, rotational = [], {"asymmetric": [], "linear": []}
     for _ in range(1500):
         integrator.step(4)
@@ -286,28 +299,50 @@ def test_copies_keep_every_setting(choice, method):
     assert duplicate.getTemperature() == 310 * unit.kelvin and duplicate.getRandomNumberSeed() == 1234
 
 
+@pytest.mark.parametrize("choice", BODY_CHOICES)
+def test_openmm_copies_run_ours_and_keep_every_setting(choice):
+    """openmm.XmlSerializer.deserialize() and clone() know only openmm.Integrator: they give back the
+    same C++ class (its XML is the original's) without our methods; deserializeIntegrator() of that
+    XML is ours with every setting."""
+    original = configured(BODY_CHOICES[choice])
+    xml = openmm.XmlSerializer.serialize(original)
+    for duplicate in (openmm.XmlSerializer.deserialize(xml), openmm.XmlSerializer.clone(original)):
+        assert type(duplicate) is openmm.Integrator and not hasattr(duplicate, "getTemperature")
+        assert openmm.XmlSerializer.serialize(duplicate) == xml
+        assert settings(openmmrigid.deserializeIntegrator(openmm.XmlSerializer.serialize(duplicate))) == settings(original)
+
+
 def test_xml_format_and_versions():
     xml = openmm.XmlSerializer.serialize(configured([[0, 1, 2], [3]]))
     assert 'type="RigidBodyLangevinIntegrator"' in xml and 'version="2"' in xml
     for attribute in ("temperature", "friction", "randomSeed", "stepSize", "constraintTolerance",
-                      "integrationForceGroups", "rotationMethod", "minimumMomentOfInertia", "explicitBodies", "measureShadowWork", "measureHeat",
+                      "integrationForceGroups", "rotationMethod", "minimumMomentOfInertia", "explicitBodies", "measureShadowWork",
                       "accuracyCheck"):
         assert attribute + "=" in xml
+    assert "measureHeat=" not in xml  # one switch measures shadow work and heat
     minimal = ('<?xml version="1.0" ?>\n<Integrator temperature="250" friction="3" stepSize=".004" '
                'type="RigidBodyLangevinIntegrator" version="1"/>\n')
-    integrator = openmm.XmlSerializer.deserialize(minimal)
+    assert type(openmm.XmlSerializer.deserialize(minimal)) is openmm.Integrator
+    integrator = openmmrigid.deserializeIntegrator(minimal)
     assert type(integrator) is RigidBodyLangevinIntegrator
     assert settings(integrator) == settings(RigidBodyLangevinIntegrator(250, 3, 0.004))
+    # Version 2 files written when the heat had a switch of its own measure both if they measured either.
+    for measured in ('measureHeat="1"', 'measureShadowWork="1"', 'measureShadowWork="1" measureHeat="1"'):
+        old = minimal.replace('version="1"', f'version="2" {measured}')
+        assert openmmrigid.deserializeIntegrator(old).getMeasureShadowWork()
+    unmeasured = minimal.replace('version="1"', 'version="2" measureHeat="0"')
+    assert not openmmrigid.deserializeIntegrator(unmeasured).getMeasureShadowWork()
     for bad, words in (('version="3"', "version"), ('version="1" rotationMethod="4"', "rotation method")):
         text = ('<?xml version="1.0" ?>\n<Integrator temperature="250" friction="3" stepSize=".004" '
                 f'type="RigidBodyLangevinIntegrator" {bad}/>\n')
-        with pytest.raises(openmm.OpenMMException, match=words):
-            openmm.XmlSerializer.deserialize(text)
+        for deserialize in (openmm.XmlSerializer.deserialize, openmmrigid.deserializeIntegrator):
+            with pytest.raises(openmm.OpenMMException, match=words):
+                deserialize(text)
     negative = minimal.replace('friction="3"', 'friction="-3"')
     with pytest.raises(openmm.OpenMMException, match="friction"):
-        openmm.XmlSerializer.deserialize(negative)
+        openmmrigid.deserializeIntegrator(negative)
     with pytest.raises(openmm.OpenMMException):
-        openmm.XmlSerializer.deserialize(minimal.replace(' temperature="250"', ""))
+        openmmrigid.deserializeIntegrator(minimal.replace(' temperature="250"', ""))
     # A RigidBodyLangevinIntegrator is not a RigidBodyIntegrator: pickled states do not cross over.
     plain = RigidBodyIntegrator.__new__(RigidBodyIntegrator)
     with pytest.raises(openmm.OpenMMException, match="RigidBodyLangevinIntegrator"):
@@ -329,7 +364,10 @@ def test_simulation_and_reporter(platformName):
     reported = float(output.getvalue().splitlines()[-1].split(",")[1])
     assert reported == pytest.approx(integrator.computeSystemTemperature().value_in_unit(unit.kelvin), rel=1e-6)
     assert integrator.getNumBodies() == len(EXPLICIT_BODIES)
-    assert [integrator.getBodyKind(b) for b in range(4)] == ["asymmetric", "linear", "point", "asymmetric"]
+    assert [list(integrator.getBodyParticles(b)) for b in range(len(EXPLICIT_BODIES))] == EXPLICIT_BODIES
+    positions, masses = systems.positions_of(simulation.context), np.array(MASSES)
+    kinds = [bodyKind(masses[body], positions[body]) for body in EXPLICIT_BODIES]
+    assert kinds == ["asymmetric", "linear", "point", "asymmetric"]
 
 
 def test_barostat_keeps_bodies_rigid():

@@ -1,12 +1,13 @@
 """The integrators in openmmtools, as its users run them (skipped where openmmtools is absent; CI
 installs it with the test extras).
 
-- ThermodynamicState with each integrator: RigidBodyLangevinIntegrator, RigidBodyIntegrator with its
-  thermostat, and a CompoundIntegrator holding ours are seen as thermostated (no AndersenThermostat
-  added, the state's temperature set on our integrator, a wrong one refused); RigidBodyIntegrator
-  without a thermostat is NVE to openmmtools (getTemperature raises an AttributeError), so it gets an
-  AndersenThermostat whose temperature follows the state;
-- our classes come back from CompoundIntegrator.getIntegrator and Context.getIntegrator;
+- ThermodynamicState with each integrator: RigidBodyLangevinIntegrator, RigidBodyBussiIntegrator
+  and a CompoundIntegrator holding either are seen as thermostated (no AndersenThermostat added, the
+  state's temperature set on our integrator, a wrong one refused); RigidBodyIntegrator is NVE to
+  openmmtools (it has no getTemperature attribute at all), so it gets an AndersenThermostat whose
+  temperature follows the state;
+- our classes come back from CompoundIntegrator.getIntegrator (the one method of openmm that
+  openmmrigid wraps, for openmmtools' sake) and Context.getIntegrator;
 - the moves of openmmrigid.openmmtools: a ContextCache reuses one Context across temperatures and
   copies the temperature into its integrator; the moves survive pickle and openmmtools'
   serialization; a few ParallelTemperingSampler iterations run and their NetCDF storage reads back
@@ -62,9 +63,7 @@ def rigid_langevin(temperature):
 
 
 def rigid_bussi(temperature):
-    integrator = openmmrigid.RigidBodyIntegrator(2.0 * unit.femtosecond)
-    integrator.setThermostat(temperature, 0.1 * unit.picosecond)
-    return integrator
+    return openmmrigid.RigidBodyBussiIntegrator(temperature, 0.1 * unit.picosecond, 2.0 * unit.femtosecond)
 
 
 def compound_of(make):
@@ -76,9 +75,9 @@ def compound_of(make):
     return factory
 
 
-THERMOSTATED = {"RigidBodyLangevinIntegrator": rigid_langevin, "RigidBodyIntegrator+thermostat": rigid_bussi,
+THERMOSTATED = {"RigidBodyLangevinIntegrator": rigid_langevin, "RigidBodyBussiIntegrator": rigid_bussi,
                 "Compound[RigidBodyLangevinIntegrator, Verlet]": compound_of(rigid_langevin),
-                "Compound[RigidBodyIntegrator+thermostat, Verlet]": compound_of(rigid_bussi)}
+                "Compound[RigidBodyBussiIntegrator, Verlet]": compound_of(rigid_bussi)}
 
 
 def rigid_member(integrator):
@@ -96,6 +95,7 @@ def test_thermostated_integrators_follow_the_state(water, name):
     context = cold.create_context(make(T300), REFERENCE)
     assert andersen_thermostats(context.getSystem()) == []
     integrator = context.getIntegrator()
+    assert type(rigid_member(integrator)).__name__ in name
     assert rigid_member(integrator).getTemperature() == T300
     hot.apply_to_context(context)
     assert rigid_member(integrator).getTemperature() == T350
@@ -109,33 +109,29 @@ def test_thermostated_integrators_follow_the_state(water, name):
 
 
 def test_nve_integrator_is_not_thermostated(water):
-    """RigidBodyIntegrator without a thermostat has no temperature (NoThermostatError: an
-    OpenMMException and an AttributeError), so openmmtools gives its System an AndersenThermostat
-    and sets that to each state's temperature; bodies found from constraints are whole clusters,
-    which the Andersen thermostat redraws whole."""
+    """RigidBodyIntegrator has no temperature (no getTemperature or setTemperature attribute at all),
+    so openmmtools gives its System an AndersenThermostat and sets that to each state's temperature;
+    bodies found from constraints are whole clusters, which the Andersen thermostat redraws whole."""
     system, positions, box = water
     integrator = openmmrigid.RigidBodyIntegrator(2.0 * unit.femtosecond)
-    for call in (integrator.getTemperature, lambda: integrator.setTemperature(T300)):
-        with pytest.raises(openmmrigid.NoThermostatError, match="no thermostat.*setThermostat") as raised:
-            call()
-        assert isinstance(raised.value, AttributeError) and isinstance(raised.value, openmm.OpenMMException)
+    assert not hasattr(integrator, "getTemperature") and not hasattr(integrator, "setTemperature")
+    with pytest.raises(AttributeError):
+        integrator.getTemperature()
     context = states.ThermodynamicState(system, T300).create_context(integrator, REFERENCE)
     thermostats = andersen_thermostats(context.getSystem())
     assert len(thermostats) == 1
     states.ThermodynamicState(system, T350).apply_to_context(context)
     assert context.getParameter(openmm.AndersenThermostat.Temperature()) == pytest.approx(350.0)
-    # Once a thermostat is set the same methods work, and removing it makes the integrator NVE again.
+    # The thermostat is a class of its own: RigidBodyBussiIntegrator has the temperature (Quantities).
     other = rigid_bussi(T300)
+    assert isinstance(other, openmmrigid.RigidBodyIntegrator)
     other.setTemperature(320.0 * unit.kelvin)
     assert other.getTemperature() == 320.0 * unit.kelvin
-    assert other.getThermostatCollisionTime() == 0.1 * unit.picosecond
-    other.removeThermostat()
-    with pytest.raises(AttributeError):
-        other.getTemperature()
+    assert other.getCollisionTime() == 0.1 * unit.picosecond
 
 
 def test_compound_and_context_return_our_classes(water):
-    """CompoundIntegrator.getIntegrator gives back a RigidBodyIntegrator or RigidBodyLangevinIntegrator
+    """CompoundIntegrator.getIntegrator gives back a RigidBodyLangevinIntegrator or RigidBodyBussiIntegrator
     (the same C++ object: a setting made through it is the compound's), stock members unchanged;
     Context.getIntegrator gives back the integrator the Context was made with."""
     system, positions, box = water
@@ -145,17 +141,20 @@ def test_compound_and_context_return_our_classes(water):
     compound.addIntegrator(openmm.LangevinMiddleIntegrator(T300, 1.0, 0.001))
     first, second, third = (compound.getIntegrator(i) for i in range(3))
     assert type(first) is openmmrigid.RigidBodyLangevinIntegrator
-    assert type(second) is openmmrigid.RigidBodyIntegrator
+    assert type(second) is openmmrigid.RigidBodyBussiIntegrator
     assert type(third) is openmm.LangevinMiddleIntegrator
     first.setTemperature(310.0)
     second.setTemperature(320.0)
     assert compound.getIntegrator(0).getTemperature() == 310.0 * unit.kelvin
     assert compound.getIntegrator(1).getTemperature() == 320.0 * unit.kelvin
+    assert compound.getIntegrator(1).getCollisionTime() == 0.1 * unit.picosecond
     context = openmm.Context(system, compound, REFERENCE)
     assert context.getIntegrator() is compound
-    assert type(context.getIntegrator().getIntegrator(1)) is openmmrigid.RigidBodyIntegrator
+    assert type(context.getIntegrator().getIntegrator(1)) is openmmrigid.RigidBodyBussiIntegrator
     rigid = rigid_langevin(T300)
     assert openmm.Context(system, rigid, REFERENCE).getIntegrator() is rigid
+    bussi = rigid_bussi(T300)
+    assert openmm.Context(system, bussi, REFERENCE).getIntegrator() is bussi
 
 
 def test_context_cache_reuses_one_context_across_temperatures(water):
@@ -175,7 +174,8 @@ def test_context_cache_reuses_one_context_across_temperatures(water):
         assert type(integrator) is type(move._get_integrator(hot))
         assert integrator.getTemperature() == T350
         assert andersen_thermostats(context.getSystem()) == []
-    assert integrator.getThermostatCollisionTime() == 0.2 * unit.picosecond
+    assert type(integrator) is openmmrigid.RigidBodyBussiIntegrator
+    assert integrator.getCollisionTime() == 0.2 * unit.picosecond
     assert np.all(np.isfinite(sampler_state.positions.value_in_unit(unit.nanometer)))
 
 
