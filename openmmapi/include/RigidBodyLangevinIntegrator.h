@@ -43,8 +43,8 @@ namespace OpenMMRigid {
  * Verlet step; no random numbers are drawn); with temperature 0 and friction > 0 the motion is damped.
  *
  * Velocities are those of LangevinMiddleIntegrator: the Context holds the velocities after the
- * Ornstein-Uhlenbeck step and the second half drift, half a step behind the positions
- * (getVelocityTimeOffset() is dt/2), and the kinetic energy, the temperature and the translational
+ * Ornstein-Uhlenbeck step and the second half drift, half a step behind the positions, and the
+ * kinetic energy, the temperature and the translational
  * and rotational kinetic energies are theirs. For a harmonic mode their distribution is canonical:
  * the sampled m <v^2> is exactly kT at any stable step, where BAOAB's on-step velocities read it low
  * by the factor 1 - (omega dt)^2/4. For rigid water, whose librations are its stiffest modes, the

@@ -4,7 +4,9 @@ ordinary positions.
 
 - bodies found from constraints and explicit bodies that keep their constraints read the Andersen
   bath temperature, as stock Verlet + constraints does; an explicit body without its constraints
-  (which the thermostat would redraw atom by atom, reading 11 % cold) is refused when the Context is made;
+  (which the thermostat would redraw atom by atom, reading 11 % cold) is refused when the Context is made,
+  as are raised moments of inertia, the message naming the integrators that thermostat instead
+  (RigidBodyBussiIntegrator, RigidBodyLangevinIntegrator) and no method the API no longer has;
 - explicit bodies that keep their constraints take their shape from the positions with the
   constraints applied (SHAKE), close to where stock's applyConstraints puts them; positions SHAKE
   cannot bring onto a constraint are a clear error; getNumBodies() answers before a Context is made
@@ -81,11 +83,20 @@ def test_andersen_thermostat_refused_for_bodies_it_would_split():
     Context is made, with a message that names the body and the remedy."""
     system, positions, bodies = water_gas(8, keep_constraints=False)
     for integrator in (openmmrigid.RigidBodyIntegrator(0.002, bodies),
+                       openmmrigid.RigidBodyBussiIntegrator(300.0, 0.1, 0.002, bodies),
                        openmmrigid.RigidBodyLangevinIntegrator(300.0, 1.0, 0.002, bodies)):
         name = type(integrator).__name__
-        with pytest.raises(openmm.OpenMMException, match=f"{name}: the System has an AndersenThermostat.*particles 0 and 1 "
-                                                         "of body 0.*setThermostat"):
+        with pytest.raises(openmm.OpenMMException, match=f"^{name}: .*AndersenThermostat") as error:
             openmm.Context(system, integrator, REFERENCE)
+        message = str(error.value)
+        assert "body 0" in message and "particles 0 and 1" in message, message
+        assert_names_the_remedy(message)
+
+
+def assert_names_the_remedy(message):
+    """The remedy is a class of the lean API, not a method it removed (issue 41)."""
+    assert "RigidBodyBussiIntegrator" in message and "RigidBodyLangevinIntegrator" in message, message
+    assert "setThermostat" not in message, message
 
 
 def test_andersen_thermostat_with_raised_moments_is_refused():
@@ -95,12 +106,15 @@ def test_andersen_thermostat_with_raised_moments_is_refused():
     and explicit ones, naming the remedy; without raised moments the same Context runs."""
     system, positions, bodies = water_gas(8)
     for integrator in (openmmrigid.RigidBodyIntegrator(0.002), openmmrigid.RigidBodyIntegrator(0.002, bodies),
+                       openmmrigid.RigidBodyBussiIntegrator(300.0, 0.1, 0.002),
                        openmmrigid.RigidBodyLangevinIntegrator(300.0, 1.0, 0.002)):
         integrator.setMinimumMomentOfInertia(0.04)
         name = type(integrator).__name__
-        with pytest.raises(openmm.OpenMMException, match=f"{name}: the System's AndersenThermostat draws velocities for the "
-                                                         "particles' own moments.*setThermostat"):
+        with pytest.raises(openmm.OpenMMException, match=f"^{name}: .*AndersenThermostat") as error:
             openmm.Context(system, integrator, REFERENCE)
+        message = str(error.value)
+        assert "raised moments" in message and "own" in message, message
+        assert_names_the_remedy(message)
     integrator = openmmrigid.RigidBodyIntegrator(0.002)
     context = openmm.Context(system, integrator, REFERENCE)
     context.setPositions(positions)

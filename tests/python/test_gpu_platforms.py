@@ -18,7 +18,9 @@ import openmm.unit as unit
 import pytest
 
 import openmmrigid
+import rigidtesting
 import systems
+from rigidtesting.bodies import bodyKind
 from systems import positions_of, velocities_of
 
 PRECISIONS = ["single", "mixed", "double"]
@@ -87,9 +89,10 @@ def test_free_motion_matches_reference(platformName, precision, method):
 
 
 def kinds_of(cluster):
-    integrator = openmmrigid.RigidBodyIntegrator(0.004, cluster.bodies)
-    context = start(systems.make_context(cluster.system, integrator, "Reference"), cluster.positions, cluster.velocities)
-    return [integrator.getBodyKind(b) for b in range(integrator.getNumBodies())]
+    """The kind of each body of the cluster, as the integrator classifies it (rigidtesting.bodies)."""
+    masses = rigidtesting.particleMasses(cluster.system)
+    positions = np.asarray(cluster.positions)
+    return [bodyKind(masses[body], positions[body]) for body in cluster.bodies]
 
 
 @pytest.fixture(scope="module")
@@ -106,11 +109,11 @@ def test_water_trajectory_matches_reference(water, platformName, precision, kind
     def make():
         if kind == "Langevin":
             integrator = openmmrigid.RigidBodyLangevinIntegrator(300.0, 5.0, 0.002)
+        elif kind == "Omelyan2 Bussi":
+            integrator = openmmrigid.RigidBodyBussiIntegrator(300.0, 0.05, 0.002)
+            integrator.setSplitting(openmmrigid.RigidBodyIntegrator.Omelyan2)
         else:
-            integrator = openmmrigid.RigidBodyIntegrator(0.002)
-            if kind == "Omelyan2 Bussi":
-                integrator.setSplitting(openmmrigid.RigidBodyIntegrator.Omelyan2)
-                integrator.setThermostat(300.0, 0.05)
+            return openmmrigid.RigidBodyIntegrator(0.002)
         integrator.setRandomNumberSeed(11)
         return integrator
 
@@ -188,10 +191,12 @@ def test_runs_past_a_reorder(platformName, precision):
 
 
 @pytest.mark.parametrize("platformName,precision", CASES)
-@pytest.mark.parametrize("integratorClass", [openmmrigid.RigidBodyIntegrator, openmmrigid.RigidBodyLangevinIntegrator])
+@pytest.mark.parametrize("integratorClass", [openmmrigid.RigidBodyIntegrator, openmmrigid.RigidBodyBussiIntegrator,
+                                             openmmrigid.RigidBodyLangevinIntegrator])
 def test_checkpoint_continues_bit_for_bit(water, platformName, precision, integratorClass):
-    integrator = (integratorClass(0.002) if integratorClass is openmmrigid.RigidBodyIntegrator
-                  else integratorClass(300.0, 1.0, 0.002))
+    leading = {openmmrigid.RigidBodyIntegrator: (), openmmrigid.RigidBodyBussiIntegrator: (300.0, 0.1),
+               openmmrigid.RigidBodyLangevinIntegrator: (300.0, 1.0)}[integratorClass]
+    integrator = integratorClass(*leading, 0.002)
     context = start(gpu_context(water.system, integrator, platformName, precision), water.positions, water.velocities)
     integrator.step(10)
     checkpoint = context.createCheckpoint()
@@ -251,10 +256,10 @@ def test_mixed_system_matches_reference(mixed, platformName, precision, splittin
 
 @pytest.mark.parametrize("platformName,precision", [case for case in CASES if case[1] != "single"])
 def test_bussi_work_and_checkpoint_match_reference(platformName, precision):
-    """The Bussi thermostat's work, summed on the device and read only when asked for, is Reference's
-    (the same seed draws the same deviates): at a checkpoint, after a load of it that must drop the
-    work done since (not read, still on the device) and keep exactly the saved value, and after the
-    run continues from the load. The kinetic energies differ as the platforms' trajectories do
+    """The Bussi thermostat's work (RigidBodyBussiIntegrator's heat, measured with setMeasureShadowWork),
+    summed on the device and read only when asked for, is Reference's (the same seed draws the same
+    deviates): at a checkpoint, after a load of it that must drop the work done since (not read, still
+    on the device) and keep exactly the saved value, and after the run continues from the load. The kinetic energies differ as the platforms' trajectories do
     (their forces differ: after 30 steps the positions are about 1e-8 nm apart in double and mixed
     precision alike, and the work 1e-9 to 3e-8 of itself), so the work must agree to 1e-6 of itself,
     where one step's work lost, leaked or counted twice is some 1e-2 of it."""
@@ -262,9 +267,9 @@ def test_bussi_work_and_checkpoint_match_reference(platformName, precision):
     KJ = unit.kilojoule_per_mole
     works = {}
     for name in ("Reference", platformName):
-        integrator = openmmrigid.RigidBodyIntegrator(0.002, cluster.bodies)
-        integrator.setThermostat(200.0, 0.02)
+        integrator = openmmrigid.RigidBodyBussiIntegrator(200.0, 0.02, 0.002, cluster.bodies)
         integrator.setRandomNumberSeed(13)
+        integrator.setMeasureShadowWork(True)
         if name == "Reference":
             context = systems.make_context(cluster.system, integrator, "Reference")
         else:
@@ -272,13 +277,13 @@ def test_bussi_work_and_checkpoint_match_reference(platformName, precision):
         start(context, cluster.positions, cluster.velocities)
         integrator.step(15)
         checkpoint = context.createCheckpoint()
-        saved = integrator.getThermostatWork().value_in_unit(KJ)
+        saved = integrator.getHeat().value_in_unit(KJ)
         integrator.step(15)
         context.loadCheckpoint(checkpoint)
-        loaded = integrator.getThermostatWork().value_in_unit(KJ)
+        loaded = integrator.getHeat().value_in_unit(KJ)
         assert loaded == saved, (name, loaded, saved)
         integrator.step(15)
-        works[name] = (saved, integrator.getThermostatWork().value_in_unit(KJ), positions_of(context))
+        works[name] = (saved, integrator.getHeat().value_in_unit(KJ), positions_of(context))
     (refSaved, refContinued, refX), (saved, continued, x) = works["Reference"], works[platformName]
     print(f"{platformName} {precision}: work {saved} then {continued} kJ/mol, Reference {refSaved} then {refContinued}; "
           f"positions {np.abs(x - refX).max():.3g} nm apart")

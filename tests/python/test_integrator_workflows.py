@@ -9,7 +9,9 @@ import pytest
 from openmm import app, unit
 
 import openmmrigid
+import rigidtesting
 import systems
+from rigidtesting.bodies import bodyKind, rigidDegreesOfFreedom
 
 PLATFORMS = systems.PLATFORMS
 
@@ -74,7 +76,7 @@ def test_barostat_moves_keep_bodies_rigid(platformName):
 @pytest.mark.parametrize("platformName", PLATFORMS)
 def test_cm_motion_remover(platformName):
     system, positions = water_box(cmMotionRemover=True)
-    masses = openmmrigid.testing.particleMasses(system)
+    masses = rigidtesting.particleMasses(system)
     integrator = openmmrigid.RigidBodyIntegrator(0.002)
     context = minimized_context(system, positions, integrator, platformName)
     # Give the whole box a drift the remover must take out.
@@ -90,8 +92,15 @@ def test_cm_motion_remover(platformName):
     netForce = context.getState(getForces=True).getForces(asNumpy=True).value_in_unit(
         unit.kilojoule_per_mole/unit.nanometer).sum(axis=0)
     assert np.linalg.norm(momentum) < 1e-6*scale + 2*0.002*np.linalg.norm(netForce)
-    # The degrees of freedom include the 3 the remover takes away (the same count as OpenMM's).
-    assert integrator.getNumDegreesOfFreedom() == 6*integrator.getNumBodies() - 3
+    # The degrees of freedom include the 3 the remover takes away (the same count as OpenMM's: 3 per
+    # massive particle, less one per constraint and 3 for the remover), and the temperature is the
+    # kinetic energy's in them.
+    dof = 6*integrator.getNumBodies() - 3
+    assert dof == 3*int((masses > 0).sum()) - system.getNumConstraints() - 3
+    assert rigidDegreesOfFreedom(context, integrator) == dof
+    kinetic = context.getState(getEnergy=True).getKineticEnergy()
+    expected = (2*kinetic/(dof*unit.MOLAR_GAS_CONSTANT_R)).value_in_unit(unit.kelvin)
+    assert integrator.computeSystemTemperature().value_in_unit(unit.kelvin) == pytest.approx(expected, rel=1e-9)
 
 
 @pytest.mark.parametrize("platformName", PLATFORMS)
@@ -167,7 +176,7 @@ def test_set_positions_and_velocities_are_projected(platformName):
     system, positions = water_box()
     for force in list(system.getForces()):
         system.removeForce(0)
-    masses = openmmrigid.testing.particleMasses(system)
+    masses = rigidtesting.particleMasses(system)
     integrator = openmmrigid.RigidBodyIntegrator(0.001)
     context = make_context(system, integrator, platformName)
     rng = np.random.default_rng(3)
@@ -212,7 +221,10 @@ def test_set_velocities_to_temperature(platformName):
 
 @pytest.mark.parametrize("platformName", PLATFORMS)
 def test_kinds_of_symmetric_bodies_far_from_the_origin(platformName):
-    """Rounding of coordinates a few nm from the origin must not turn a symmetric shape asymmetric."""
+    """Rounding of coordinates a few nm from the origin must not turn a symmetric shape asymmetric: the
+    shapes the Context reports, as set and after free rotation, keep their kind (moments within 1e-10
+    relative are equal, as the integrator counts them; rigidtesting.bodies), and each body has its 6
+    degrees of freedom."""
     rng = np.random.default_rng(11)
     tetrahedron = 0.1/np.sqrt(3.0)*np.array([[1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]], dtype=float)
     angles = 2*np.pi*np.arange(3)/3
@@ -233,4 +245,19 @@ def test_kinds_of_symmetric_bodies_far_from_the_origin(platformName):
     integrator = openmmrigid.RigidBodyIntegrator(0.001, bodies)
     context = make_context(system, integrator, platformName)
     context.setPositions(np.array(positions))
-    assert [integrator.getBodyKind(b) for b in range(len(bodies))] == expected
+    masses = rigidtesting.particleMasses(system)
+
+    def kinds():
+        current = context.getState(getPositions=True).getPositions(asNumpy=True).value_in_unit(unit.nanometer)
+        return [bodyKind(masses[body], current[body]) for body in bodies]
+    assert kinds() == expected
+    # Spin every body (rigid velocities: a random angular velocity about its centre) and let it rotate.
+    centred = np.array(positions)
+    velocities = np.zeros_like(centred)
+    for body in bodies:
+        centre = masses[body] @ centred[body]/masses[body].sum()
+        velocities[body] = np.cross(rng.normal(scale=5.0, size=3), centred[body] - centre)
+    context.setVelocities(velocities)
+    integrator.step(20)
+    assert kinds() == expected
+    assert rigidDegreesOfFreedom(context, integrator) == 6*len(bodies)

@@ -13,7 +13,8 @@ System set to the same State, whose next steps are the right ones) or expects an
 - the State right after setVelocities reports the rigid projection of what was set;
 - numpy scalars are accepted wherever stock OpenMM accepts them;
 - checkpoints: one of the other integrator class is refused by name, and checkpoints written by an
-  older build (tests/python/data, made by make_legacy_checkpoints.py) still load and continue;
+  older build (tests/python/data, made by make_legacy_checkpoints.py) still load and continue, those
+  of a RigidBodyIntegrator with setThermostat() in the RigidBodyBussiIntegrator that replaced it;
 - error messages name the class the user made and say what is wrong.
 
 Reference runs in double precision and is compared to rounding; CPU (deterministic forces) to a few
@@ -31,8 +32,8 @@ import openmm.unit as unit
 import pytest
 
 import systems
-from openmmrigid import RigidBodyIntegrator, RigidBodyLangevinIntegrator
-from openmmrigid.testing import particleMasses
+from openmmrigid import RigidBodyBussiIntegrator, RigidBodyIntegrator, RigidBodyLangevinIntegrator
+from rigidtesting import particleMasses
 from systems import make_context, positions_of, velocities_of
 
 PLATFORMS = systems.PLATFORMS
@@ -49,6 +50,12 @@ def _load_legacy_module():
 
 
 legacy = _load_legacy_module()
+
+
+# The legacy checkpoints' System and integrators in today's API ("thermostat", written by a RigidBodyIntegrator
+# with setThermostat(300 K, 0.1 ps), loads into the RigidBodyBussiIntegrator that replaced it).
+legacy_integrator = legacy.legacy_integrator
+legacy_context = legacy.legacy_context
 
 
 # ------------------------------------------------------------------------------------------------
@@ -79,9 +86,11 @@ def water_system(water, bodySource):
 
 
 def rigid_integrator(bodies=None, integratorClass=RigidBodyIntegrator):
-    """A RigidBodyIntegrator, or a RigidBodyLangevinIntegrator at 300 K and 1/ps, with explicit bodies
-    or (bodies None) bodies found from the constraints."""
-    arguments = (STEP,) if integratorClass is RigidBodyIntegrator else (300.0, 1.0, STEP)
+    """A RigidBodyIntegrator, a RigidBodyBussiIntegrator at 300 K and 0.1 ps, or a
+    RigidBodyLangevinIntegrator at 300 K and 1/ps, with explicit bodies or (bodies None) bodies found
+    from the constraints."""
+    arguments = {RigidBodyIntegrator: (STEP,), RigidBodyBussiIntegrator: (300.0, 0.1, STEP),
+                 RigidBodyLangevinIntegrator: (300.0, 1.0, STEP)}[integratorClass]
     return integratorClass(*arguments, *([bodies] if bodies is not None else []))
 
 
@@ -212,14 +221,15 @@ def test_compound_integrator_switching_back(water, platformName):
 
 
 @pytest.mark.parametrize("platformName", PLATFORMS)
-@pytest.mark.parametrize("integratorClass", [RigidBodyIntegrator, RigidBodyLangevinIntegrator])
+@pytest.mark.parametrize("integratorClass", [RigidBodyIntegrator, RigidBodyBussiIntegrator, RigidBodyLangevinIntegrator])
 def test_box_change_between_steps(water, integratorClass, platformName):
     """setPeriodicBoxVectors() between steps, without new positions, sends the integrator no notice:
     the next step must still use the forces in the new box. The answer: a fresh Context loaded from a
-    checkpoint of the state right after the change (the same random numbers for Langevin)."""
+    checkpoint of the state right after the change (the same random numbers for Bussi and Langevin)."""
     system, _ = water_system(water, "constraints")
     integrator = rigid_integrator(integratorClass=integratorClass)
-    integrator.setRandomNumberSeed(11)
+    if integratorClass is not RigidBodyIntegrator:
+        integrator.setRandomNumberSeed(11)
     context = started(system, integrator, platformName, water.positions, water.velocities)
     integrator.step(3)
     box = context.getState().getPeriodicBoxVectors(asNumpy=True).value_in_unit(unit.nanometer)
@@ -227,7 +237,8 @@ def test_box_change_between_steps(water, integratorClass, platformName):
     checkpoint = context.createCheckpoint()
     integrator.step(1)
     answerIntegrator = rigid_integrator(integratorClass=integratorClass)
-    answerIntegrator.setRandomNumberSeed(11)
+    if integratorClass is not RigidBodyIntegrator:
+        answerIntegrator.setRandomNumberSeed(11)
     answer = make_context(system, answerIntegrator, platformName)
     answer.loadCheckpoint(checkpoint)
     answerIntegrator.step(1)
@@ -434,7 +445,7 @@ def test_molecules_split_across_the_boundary(water, bodySource, platformName):
 
 
 @pytest.mark.parametrize("platformName", PLATFORMS)
-@pytest.mark.parametrize("integratorClass", [RigidBodyIntegrator, RigidBodyLangevinIntegrator])
+@pytest.mark.parametrize("integratorClass", [RigidBodyIntegrator, RigidBodyBussiIntegrator, RigidBodyLangevinIntegrator])
 def test_blow_up_raises_at_that_step(water, integratorClass, platformName):
     system, positions = two_close_waters(water, 0.02)
     integrator = rigid_integrator(integratorClass=integratorClass)
@@ -480,7 +491,7 @@ def constrained_pair_turned_square(integratorClass, platformName):
     positions = np.array([[1.0, 1.0, 1.0], [1.1, 1.0, 1.0], [2.0, 2.0, 2.0],
                           [2.0 + 0.15139 / 2, 2.0 + half, 2.0], [2.0 - 0.15139 / 2, 2.0 + half, 2.0]])
     velocities = np.zeros_like(positions)
-    firstDrift = 0.002 if integratorClass is RigidBodyIntegrator else 0.001
+    firstDrift = 0.001 if integratorClass is RigidBodyLangevinIntegrator else 0.002
     velocities[1] = [-0.1 / firstDrift, 0.2 / firstDrift, 0.0]
     integrator = rigid_integrator(integratorClass=integratorClass)
     context = make_context(system, integrator, platformName)
@@ -490,7 +501,7 @@ def constrained_pair_turned_square(integratorClass, platformName):
 
 
 @pytest.mark.parametrize("platformName", PLATFORMS)
-@pytest.mark.parametrize("integratorClass", [RigidBodyIntegrator, RigidBodyLangevinIntegrator])
+@pytest.mark.parametrize("integratorClass", [RigidBodyIntegrator, RigidBodyBussiIntegrator, RigidBodyLangevinIntegrator])
 def test_constraint_solver_blow_up_raises_at_that_step(integratorClass, platformName):
     """Where the constraints among free particles cannot be satisfied from a drift (the solver
     divides by zero and returns non-finite or far-flung positions, without an error of its own), the
@@ -557,6 +568,10 @@ def _body_query(method, index):
     return getattr(integrator, method)(index)
 
 
+def _bussi_settings(integrator):
+    return integrator.getTemperature(), integrator.getCollisionTime(), integrator.getStepSize()
+
+
 def _set_get(target, setter, getter, *values):
     getattr(target, setter)(*values)
     return getattr(target, getter)()
@@ -592,27 +607,42 @@ def _rigid_setting(setter, getter, *values):
     return _set_get(RigidBodyIntegrator(STEP), setter, getter, *values)
 
 
+def _bussi_setting(setter, getter, *values):
+    return _set_get(RigidBodyBussiIntegrator(300.0, 0.1, STEP), setter, getter, *values)
+
+
 # (name, numpy type, stock use, rigid use): a use takes n, which makes each number it passes, and
 # returns what the calls give back. The stock use shows that stock OpenMM takes that numpy type there.
 NUMPY_CASES = [
     ("step", np.int64, lambda n: _steps_taken(openmm.VerletIntegrator(STEP), n(3)),
      lambda n: _steps_taken(RigidBodyIntegrator(STEP, [[0, 1, 2]]), n(3))),
-    ("getBodyKind", np.int64, _stock_index, lambda n: _body_query("getBodyKind", n(0))),
     ("getBodyParticles", np.int32, _stock_index, lambda n: list(_body_query("getBodyParticles", n(0)))),
-    ("getBodyMoments", np.int64, _stock_index, lambda n: _body_query("getBodyMoments", n(0))),
+    ("getBodyParticles", np.int64, _stock_index, lambda n: list(_body_query("getBodyParticles", n(0)))),
     ("RigidBodyIntegrator", np.float32, _stock_step_size, lambda n: RigidBodyIntegrator(n(STEP)).getStepSize()),
     ("RigidBodyIntegrator", np.float64, _stock_step_size, lambda n: RigidBodyIntegrator(n(STEP)).getStepSize()),
     ("RigidBodyLangevinIntegrator", np.float32,
      lambda n: _langevin_settings(openmm.LangevinMiddleIntegrator(n(300.0), n(1.0), n(STEP))),
      lambda n: _langevin_settings(RigidBodyLangevinIntegrator(n(300.0), n(1.0), n(STEP)))),
+    ("RigidBodyBussiIntegrator", np.float32,
+     lambda n: _langevin_settings(openmm.LangevinMiddleIntegrator(n(300.0), n(1.0), n(STEP))),
+     lambda n: _bussi_settings(RigidBodyBussiIntegrator(n(300.0), n(0.1), n(STEP)))),
+    ("RigidBodyBussiIntegrator", np.float64,
+     lambda n: _langevin_settings(openmm.LangevinMiddleIntegrator(n(300.0), n(1.0), n(STEP))),
+     lambda n: _bussi_settings(RigidBodyBussiIntegrator(n(300.0), n(0.1), n(STEP)))),
     ("setRotationMethod", np.int64, _stock_enum,
      lambda n: _rigid_setting("setRotationMethod", "getRotationMethod", n(RigidBodyIntegrator.NoSquish))),
     ("setSplitting", np.int64, _stock_enum,
      lambda n: _rigid_setting("setSplitting", "getSplitting", n(RigidBodyIntegrator.Omelyan2))),
+    ("setMinimumMomentOfInertia", np.float32, _stock_temperature,
+     lambda n: _rigid_setting("setMinimumMomentOfInertia", "getMinimumMomentOfInertia", n(0.04))),
     ("setRandomNumberSeed", np.int64, _stock_seed,
-     lambda n: _rigid_setting("setRandomNumberSeed", "getRandomNumberSeed", n(5))),
-    ("setThermostat", np.float32, _stock_temperature,
-     lambda n: _rigid_setting("setThermostat", "getThermostatTemperature", n(310.0), n(0.1))),
+     lambda n: _bussi_setting("setRandomNumberSeed", "getRandomNumberSeed", n(5))),
+    ("setRandomNumberSeed", np.int64, _stock_seed,
+     lambda n: _set_get(RigidBodyLangevinIntegrator(300.0, 1.0, STEP), "setRandomNumberSeed", "getRandomNumberSeed", n(5))),
+    ("setTemperature", np.float32, _stock_temperature,
+     lambda n: _bussi_setting("setTemperature", "getTemperature", n(310.0))),
+    ("setCollisionTime", np.float32, _stock_temperature,
+     lambda n: _bussi_setting("setCollisionTime", "getCollisionTime", n(0.25))),
     ("setTemperature", np.float32, _stock_temperature,
      lambda n: _set_get(RigidBodyLangevinIntegrator(300.0, 1.0, STEP), "setTemperature", "getTemperature", n(310.0))),
 ]
@@ -637,19 +667,23 @@ def test_numpy_scalars(scalar, stockUse, rigidUse):
                                              ("langevin", "thermostat"), ("thermostat", "langevin")])
 def test_checkpoint_of_the_other_class_is_refused(written, loaded, platformName):
     positions, velocities = legacy.water_positions()
-    writer, writerIntegrator = legacy.legacy_context(written, "constraints", platformName)
+    writer, writerIntegrator = legacy_context(written, "constraints", platformName)
     writer.setPositions(positions)
     writer.setVelocities(velocities)
     writerIntegrator.step(2)
-    reader, readerIntegrator = legacy.legacy_context(loaded, "constraints", platformName)
+    reader, readerIntegrator = legacy_context(loaded, "constraints", platformName)
     with pytest.raises(openmm.OpenMMException) as error:
         reader.loadCheckpoint(writer.createCheckpoint())
         readerIntegrator.step(1)
     message = str(error.value)
-    assert "RigidBodyLangevinIntegrator" in message and "RigidBodyIntegrator" in message, message
+    # Both classes by name: the reader's first, and the writer's ("RigidBodyIntegrator" alone must not
+    # pass for "RigidBodyBussiIntegrator").
+    readerName, writerName = type(readerIntegrator).__name__, type(writerIntegrator).__name__
+    assert message.startswith(readerName + ":"), message
+    assert f" {writerName}" in message, message
 
 
-@pytest.mark.parametrize("integratorClass", [RigidBodyIntegrator, RigidBodyLangevinIntegrator])
+@pytest.mark.parametrize("integratorClass", [RigidBodyIntegrator, RigidBodyBussiIntegrator, RigidBodyLangevinIntegrator])
 @pytest.mark.parametrize("bodySource", ["constraints", "explicit"])
 def test_checkpoint_continues_bit_for_bit_on_reference(water, bodySource, integratorClass):
     """On Reference a checkpoint continues exactly the run that wrote it, as stock integrators do:
@@ -692,7 +726,7 @@ def test_legacy_checkpoints_still_load(kind, bodySource, prefix):
     velocities are on-step: loaded, they go half a kick back to the half-step velocities of today's
     step, which is the same in positions, so the positions agree to rounding (in the harmonic trap
     the half kick moves them by about 1e-3 nm in the five steps)."""
-    context, integrator = legacy.legacy_context(kind, bodySource)
+    context, integrator = legacy_context(kind, bodySource)
     context.loadCheckpoint((DATA / f"{legacy.stem(kind, bodySource, prefix)}.chk").read_bytes())
     integrator.step(legacy.STEPS_AFTER)
     expected = np.load(DATA / f"{legacy.stem(kind, bodySource, prefix)}.npy")
@@ -703,7 +737,7 @@ def test_legacy_checkpoints_still_load(kind, bodySource, prefix):
 # Messages
 # ------------------------------------------------------------------------------------------------
 
-@pytest.mark.parametrize("integratorClass", [RigidBodyIntegrator, RigidBodyLangevinIntegrator])
+@pytest.mark.parametrize("integratorClass", [RigidBodyIntegrator, RigidBodyBussiIntegrator, RigidBodyLangevinIntegrator])
 def test_a_system_without_rigid_bodies_is_refused(water, integratorClass):
     """Water built with rigidWater=False has no rigid constraint cluster: the integrator found no body
     and ran as a plain integrator without a word. Refused, naming the likely cause; an explicit empty
@@ -721,8 +755,9 @@ def test_a_system_without_rigid_bodies_is_refused(water, integratorClass):
 @pytest.mark.parametrize("problem", ["coincident", "not-finite"])
 def test_an_explicit_body_without_a_shape_says_why(water, problem, platformName):
     """An explicit body whose positions cannot shape it (its particles at one point, or a coordinate
-    NaN) was reported by getNumDegreesOfFreedom() and getBodyKind() as positions never set; each says
-    what is wrong with the positions given, as the step does."""
+    NaN) was reported by the queries that need the bodies' shapes (computeSystemTemperature(); the
+    degrees of freedom count the body's kind) as positions never set; each says what is wrong with the
+    positions given, as the step does. The other bodies are unaffected."""
     system, bodies = explicit_bodies(water)
     integrator = rigid_integrator(bodies)
     context = make_context(system, integrator, platformName)
@@ -735,14 +770,14 @@ def test_an_explicit_body_without_a_shape_says_why(water, problem, platformName)
         # (OpenCL reads the whole molecule back as NaN: its first particle is named there.)
         expected = "particle (" + "|".join(str(i) for i in bodies[3][:2]) + ") of body 3 has a non-finite position"
     context.setPositions(positions)
-    for call in (integrator.getNumDegreesOfFreedom, lambda: integrator.getBodyKind(3), lambda: integrator.step(1)):
+    for call in (integrator.computeSystemTemperature, lambda: integrator.step(1)):
         with pytest.raises(openmm.OpenMMException, match=f"RigidBodyIntegrator: .*{expected}"):
             call()
-    assert integrator.getBodyKind(0) in ("asymmetric", "symmetric")
+    assert integrator.getBodyParticles(0) == bodies[0] and integrator.getBodyParticles(3) == bodies[3]
 
 
 @pytest.mark.parametrize("platformName", PLATFORMS)
-@pytest.mark.parametrize("integratorClass", [RigidBodyIntegrator, RigidBodyLangevinIntegrator])
+@pytest.mark.parametrize("integratorClass", [RigidBodyIntegrator, RigidBodyBussiIntegrator, RigidBodyLangevinIntegrator])
 def test_particle_twice_in_a_body(water, integratorClass, platformName):
     system, _ = explicit_bodies(water)
     with pytest.raises(openmm.OpenMMException) as error:

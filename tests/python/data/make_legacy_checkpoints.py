@@ -9,7 +9,8 @@ fresh Context, takes STEPS_AFTER steps and compares the positions with the saved
 The system: four TIP3P waters in a 1.2 nm periodic box (NonbondedForce, CutoffPeriodic, 0.5 nm), with
 their bodies found from SETTLE-like constraints ("constraints") or given explicitly with no
 constraints ("explicit"). For each body source, three integrators: RigidBodyIntegrator without
-thermostat ("plain"), with setThermostat(300 K, 0.1 ps) ("thermostat"), and
+thermostat ("plain"), with its thermostat at 300 K, 0.1 ps ("thermostat": RigidBodyBussiIntegrator
+since it was a class; the commits above wrote it with RigidBodyIntegrator.setThermostat()), and
 RigidBodyLangevinIntegrator(300 K, 5/ps) ("langevin"; in format 1 also "langevintrap", with every
 particle in a harmonic trap about the box centre). Each run: positions and velocities set from
 fixed numbers, STEPS_BEFORE steps, checkpoint to legacy_<kind>_<bodies>.chk, STEPS_AFTER more steps,
@@ -90,11 +91,12 @@ def legacy_integrator(kind, bodySource):
     if kind.startswith("langevin"):
         integrator = (openmmrigid.RigidBodyLangevinIntegrator(300.0, 5.0, STEP_SIZE, explicit) if explicit
                       else openmmrigid.RigidBodyLangevinIntegrator(300.0, 5.0, STEP_SIZE))
+    elif kind == "thermostat":
+        integrator = (openmmrigid.RigidBodyBussiIntegrator(300.0, 0.1, STEP_SIZE, explicit) if explicit
+                      else openmmrigid.RigidBodyBussiIntegrator(300.0, 0.1, STEP_SIZE))
     else:
-        integrator = (openmmrigid.RigidBodyIntegrator(STEP_SIZE, explicit) if explicit
-                      else openmmrigid.RigidBodyIntegrator(STEP_SIZE))
-        if kind == "thermostat":
-            integrator.setThermostat(300.0, 0.1)
+        return (openmmrigid.RigidBodyIntegrator(STEP_SIZE, explicit) if explicit
+                else openmmrigid.RigidBodyIntegrator(STEP_SIZE))
     integrator.setRandomNumberSeed(SEED)
     return integrator
 
