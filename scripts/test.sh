@@ -75,4 +75,5 @@ status=0
 # From the repository root the source tree holds no importable openmmrigid (the sources are in
 # python/), so this tests the installed wheel.
 "$python" -m pytest tests/python -q || status=1
+bash scripts/docs.sh || status=1  # the manual (docs/), every warning an error
 exit "$status"
