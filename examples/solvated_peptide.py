@@ -7,6 +7,12 @@ cubic box of 2.6 nm). Amber14 (amber14-all.xml + amber14/tip4pew.xml), PME, cons
 rigidWater=True, so RigidBodyIntegrator makes each water a rigid body (its M site a virtual site)
 and moves the peptide's atoms freely by velocity Verlet, with its bonds to hydrogen constrained.
 
+Step: 2 fs by default. The peptide's atoms are integrated as free particles with their bonds to
+hydrogen constrained and no mass repartitioning: the usual 2 fs limit of a flexible solute (its
+angles to hydrogen) holds for either integrator, as in any stock simulation, and rigid waters cannot
+lift it (the README: even with hydrogen mass repartitioning the peptide caps every integrator at
+5 fs). The example therefore compares energy conservation and constraints at the same step.
+
 After minimization and 2 ps of stock Langevin dynamics at 300 K, both integrators run NVE for 5 ps
 at 2 fs from the same state: stock VerletIntegrator (SETTLE for the waters, CCMA for the peptide)
 and RigidBodyIntegrator (Exact free rotation), both with constraint tolerance 1e-10. The script

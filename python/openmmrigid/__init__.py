@@ -36,6 +36,16 @@ topology helpers); importing this package changes nothing in ``openmm``.
 
 from importlib.metadata import PackageNotFoundError, version as _distributionVersion
 
+# First of all, before any compiled code of the package loads: the running OpenMM must be the release the
+# plugin was built against (exactly: OpenMM's C++ ABI is not stable across releases; _versioncheck.py).
+from ._versioncheck import checkOpenMMVersion as _checkOpenMMVersion, runningOpenMMVersion as _runningOpenMMVersion
+
+try:
+    from ._build import OPENMM_VERSION as _BUILT_AGAINST_OPENMM
+except ImportError:  # a source tree that was never built: nothing to compare with
+    _BUILT_AGAINST_OPENMM = None
+_checkOpenMMVersion(_BUILT_AGAINST_OPENMM, _runningOpenMMVersion())
+
 from . import special
 from .freerotor import FreeRotor
 from .integrator import (AccuracyWarning, RigidBodyBussiIntegrator, RigidBodyIntegrator, RigidBodyIntegratorBase,
