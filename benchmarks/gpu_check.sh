@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # shellcheck disable=SC2317 # the phase functions run through phase()
 # The GPU check of openmm-rigid in one offline call, for a machine with an NVIDIA GPU and no network
-# (the lent GPU machine: its own Python 3.12 with numpy, scipy, pytest, cmake, ninja,
+# (an offline GPU host, such as one with its own Python 3.12 with numpy, scipy, pytest, cmake, ninja,
 # scikit-build-core, g++ and nvcc, and no openmm). Two halves:
 #
 #   bash benchmarks/gpu_check.sh fetch   # here, with a network: every wheel the check needs, into .whl/

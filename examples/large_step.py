@@ -1,17 +1,17 @@
 """The point of openmm-rigid: rigid water sampled at a step stock OpenMM cannot take.
 
 Rigid TIP4P-Ew water (amber14/tip4pew.xml, PME 0.9 nm, rigidWater, 300 K, friction 1/ps: the systems
-of the README's measurements) runs at constant temperature, side by side, with
+of the project's measurements, docs/guide/step-sizes.md) runs at constant temperature, side by side, with
 
 - stock ``LangevinMiddleIntegrator`` + SETTLE at its accurate step, 5 fs by default, and
 - ``RigidBodyLangevinIntegrator`` with every moment of inertia raised to at least 0.04 amu nm^2
   (``setMinimumMomentOfInertia``) at its accurate step, 12 fs by default.
 
-Why these steps (the README's "Raised moments of inertia" and docs/results/inertia_sampling.md: 500
+Why these steps (docs/guide/raised-moments.md and docs/results/inertia_sampling.md: 500
 TIP4P-Ew waters, NVT, friction 1/ps, U per water against the step, bias tolerance 0.1 kJ/mol): stock
-is accurate to 5.3-6 fs (+0.13 kJ/mol at 6 fs in one reading, NaN at 8 fs), and the README times it
+is accurate to 5.3-6 fs (+0.13 kJ/mol at 6 fs in one reading, NaN at 8 fs), and the benchmarks time it
 at 5 fs; the rigid integrator with raised moments is accurate to 13.5-14 fs (unstable at 16 fs), and
-its accuracy check stays quiet at 12 and 14 fs. 12 fs is the README's own example for raised moments
+its accuracy check stays quiet at 12 and 14 fs. 12 fs is the guide's own example for raised moments
 and keeps a margin below 13.5 fs. Raised moments keep every configurational average (U, g(r),
 density: the orientational Boltzmann weight has no inertia in it), not the dynamics (librations and
 diffusion slow), the rigid-body counterpart of hydrogen mass repartitioning. ``--stock-step`` and
@@ -58,7 +58,7 @@ import openmmrigid
 from _molecules import MOLAR_GAS_CONSTANT, WATERS_PER_CUBIC_NANOMETRE
 
 TEMPERATURE = 300.0   # K
-FRICTION = 1.0        # 1/ps: the friction of the README's step measurements
+FRICTION = 1.0        # 1/ps: the friction of the step measurements (docs/guide/step-sizes.md)
 MINIMUM_MOMENT = 0.04  # amu nm^2: every water a spherical top (its moments are 0.006 to 0.018)
 OUTPUT = Path(__file__).resolve().parent / "output" / "large_step.png"
 
@@ -309,13 +309,13 @@ def summarize(runs, rounds, discardRounds):
         defaultSteps = round(runs[0].dt*1000, 6) == 5 and round(runs[1].dt*1000, 6) == 12
         print(f"U per molecule, rigid - stock: {difference:+.3f} +- {error:.3f} kJ/mol ({sigmas:.1f} standard errors: "
               + ("the same within the errors)" if sigmas < 2 else "more than these errors; see the legend)")
-              + ("; the README's longer runs put it near -0.2" if defaultSteps else ""))
+              + ("; docs/results/inertia_sampling.md's longer runs put it near -0.2" if defaultSteps else ""))
     print("\nns/day: simulated time per day of the step() calls alone, over the measured part; ms/step: the same per\n"
           "  step; the two runs advance in turn, so both see the same load (other work on the cores adds noise).\n"
           "U per molecule: the mean potential energy per water +- its standard error (from the samples'\n"
           "  autocorrelation; U wanders on a scale of several ps, so a run of 30 ps resolves about 0.1 to 0.2\n"
           "  kJ/mol and its error bar can understate that). A configurational average: raised moments keep it, so\n"
-          "  the two differ only by each integrator's small bias at its step; the README's runs (500 waters, two\n"
+          "  the two differ only by each integrator's small bias at its step; docs/results/inertia_sampling.md's runs (500 waters, two\n"
           "  starts of 20 ps, against 2 fs) read stock at 4 to 6 fs +0.07 to +0.08 and raised moments at 12 fs\n"
           "  -0.11 +- 0.05 kJ/mol: a difference near -0.2 kJ/mol, 0.4 % of U.\n"
           "T: the kinetic temperature (translational and rotational degrees of freedom together); T trans: that\n"

@@ -17,7 +17,7 @@ at the end the script checks that the solute kept its shape and that the energy 
 differs from the lean one's by the same constant as at the start.
 
 Step: 2 fs by default, a conservative step for a first run of a new rigid model: the point here is
-the lean System and the bodies' shapes, not speed. For this solute in rigid water the README reads,
+the lean System and the bodies' shapes, not speed. For this solute in rigid water the measurements (docs/guide/step-sizes.md) read,
 by the kinetic temperature, 8 fs with standard moments and 14 fs with moments raised to 0.04 amu nm^2
 (setMinimumMomentOfInertia) as accurate, but its potential energy at large steps is not resolved
 there; --step 8 runs at the larger step with the accuracy check watching.
@@ -142,7 +142,7 @@ def main():
           f"({dof}); the translational and rotational ones count 3 per body (and free "
           "particle), less 3 for the CMMotionRemover, and 3 per rigid body that is not linear: each should read 300 K "
           "within its noise (RigidBodyLangevinIntegrator reports LangevinMiddleIntegrator's half-step velocities, "
-          "whose temperature is the bath's at any stable step; see the README).")
+          "whose temperature is the bath's at any stable step; see docs/guide/thermostats.md).")
     output = Path(__file__).resolve().parent / "output"
     output.mkdir(exist_ok=True)
     with open(output / "rigid_solute.pdb", "w") as stream:

@@ -145,9 +145,9 @@ def main():
     print("\ndrift: slope of a linear fit of the total energy over the run, per degree of freedom (0 for an ideal\n"
           "  integrator; short runs scatter about it, in either sign);\n"
           "fluctuation: standard deviation of the total energy about that fit (smaller is more accurate; at 1 to\n"
-          "  2 fs most of it comes from the PME cutoff, not from the integrator: see the README's Results);\n"
+          "  2 fs most of it comes from the PME cutoff, not from the integrator: see docs/results/energy_drift.md);\n"
           "ms/step: wall time of the step() calls alone; cost / stock: median over the rounds of the integrator's\n"
-          "  time over stock's in the same round. Other work on the same cores still adds noise: the README's\n"
+          "  time over stock's in the same round. Other work on the same cores still adds noise: the step-cost results\n"
           "  figures come from benchmarks/step_cost.py (longer blocks, medians of repetitions).")
     print(f"total {time.perf_counter() - started:.0f} s")
 

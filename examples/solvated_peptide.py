@@ -10,7 +10,7 @@ and moves the peptide's atoms freely by velocity Verlet, with its bonds to hydro
 Step: 2 fs by default. The peptide's atoms are integrated as free particles with their bonds to
 hydrogen constrained and no mass repartitioning: the usual 2 fs limit of a flexible solute (its
 angles to hydrogen) holds for either integrator, as in any stock simulation, and rigid waters cannot
-lift it (the README: even with hydrogen mass repartitioning the peptide caps every integrator at
+lift it (docs/guide/proteins.md: even with hydrogen mass repartitioning the peptide caps every integrator at
 5 fs). The example therefore compares energy conservation and constraints at the same step.
 
 After minimization and 2 ps of stock Langevin dynamics at 300 K, both integrators run NVE for 5 ps

@@ -213,7 +213,7 @@ public:
      * times the kinetic energy; in two windows in a row) it says so once, from within the step, naming the
      * step size, the figure and the remedies: in Python as an openmmrigid.AccuracyWarning, in C++ on the
      * standard error stream. The run goes on. A System with an AndersenThermostat is not checked. The
-     * README ("The accuracy check") gives the limits and the measurements behind them.
+     * manual's guide (docs/guide/accuracy-check.md) gives the limits and the measurements behind them.
      *
      * @param check  true to check (the default)
      */

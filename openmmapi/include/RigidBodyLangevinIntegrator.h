@@ -53,7 +53,7 @@ namespace OpenMMRigid {
  * dt^2 at every point of the step: in rigid water at 8 fs (friction 1/ps) the libration about the
  * axis of least moment reads about 7 % hot, the translation 1 to 2 % cold, and the reported
  * temperature 1 to 2 % hot (LangevinMiddleIntegrator + SETTLE: the same libration, 3 % hot in all),
- * while the configurational averages stay those of the small steps (the README and
+ * while the configurational averages stay those of the small steps (docs/guide/thermostats.md and
  * docs/results/thermostat_temperature.md give the measurements). Velocities one sets are
  * taken as such half-step velocities (setVelocitiesToTemperature() shifts them by half a kick, as for
  * LangevinMiddleIntegrator).

@@ -1,7 +1,7 @@
 """The C++ API of the installed wheel: a program built only against site-packages (the headers the
 wheel installs under openmmrigid/include, libOpenMMRigid.so beside them, OpenMM's own headers and
 library in OpenMM.libs) creates a RigidBodyIntegrator and a RigidBodyBussiIntegrator, loads the
-Reference kernels as the README says, and steps a rigid water with each; it must report the body it
+Reference kernels as docs/api/cpp.rst says, and steps a rigid water with each; it must report the body it
 found, a conserved constraint geometry, and the temperature of the water's 6 degrees of freedom. The
 wheel installs every public header of openmmapi/include."""
 

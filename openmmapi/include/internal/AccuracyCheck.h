@@ -27,10 +27,10 @@ namespace OpenMMRigid {
  *   grows as dt^2 and is intensive). The thermostat holds the on-step kinetic energy at the bath's,
  *   so an error that leaves the energy without drift still biases the ensemble (Verlet above 4 fs
  *   in rigid water); without a thermostat the run samples its own (shadow) energy surface, and
- *   only a drift is wrong by the README's guide for constant energy.
+ *   only a drift is wrong by the guide's rule for constant energy (docs/guide/accuracy-check.md).
  *
  * It fires when a figure is above its limit in two windows in a row (so that one window's
- * fluctuation does not), once; the limits and their measurements: the README, "The accuracy check".
+ * fluctuation does not), once; the limits and their measurements: docs/guide/accuracy-check.md.
  *
  * It measures in episodes: one from the first step of a Context, and from every change of the
  * setting, of at least two windows, continued for as long as the last window is above a limit; then
