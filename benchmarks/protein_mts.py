@@ -17,6 +17,9 @@ solute's bonded energy, group 1) must agree with the reference, stock ``Langevin
   waters' moments raised to ``--floor``;
 - both together: rigid X-H groups with raised moments and the bonded forces in substeps.
 
+Rigid X-H groups fix the H-X-H angles, a model change: their rows are measured against the same model at
+2 fs ("rigid X-H groups, model reference"), the others against stock at 2 fs.
+
 Each run starts from one equilibrated state (stock 2 fs, kept in benchmarks/results/), draws its
 velocities, discards ``--equilibrate`` ps and samples every 0.1 ps for ``--time`` ps. A configuration
 stops at its first step that fails. The biases are against the reference's mean, +- the combined
@@ -26,6 +29,8 @@ default: its episodes cost within noise of a step without it, docs/results/accur
 
     python benchmarks/protein_mts.py                 # about 30 minutes on 2 cores
     python benchmarks/protein_mts.py --quick         # smoke run: 0.5 ps, two configurations
+    python benchmarks/protein_mts.py --floor 0.16 --seeds 3 --only "HMR" "X-H" --name protein_mts_floor
+                                                     # the stock references, HMR 4 fs and the rigid X-H rows, 3 runs each
 
 Writes docs/results/protein_mts.md and docs/figures/protein_mts.png (a quick run: benchmarks/results/).
 """
@@ -84,9 +89,15 @@ def startingState(args, platform, properties):
 
 
 class Configuration:
-    def __init__(self, label, steps, stock=False, hmr=False, rigidGroups=False, substepFs=None):
+    def __init__(self, label, steps, stock=False, hmr=False, rigidGroups=False, substepFs=None, reference=False):
         self.label, self.steps, self.stock, self.hmr = label, steps, stock, hmr
-        self.rigidGroups, self.substepFs = rigidGroups, substepFs
+        self.rigidGroups, self.substepFs, self.reference = rigidGroups, substepFs, reference
+
+    @property
+    def model(self):
+        """Which configurational distribution the configuration samples: rigid X-H groups fix the H-X-H
+        angles (a model change), so they are measured against their own small-step reference."""
+        return "rigid X-H" if self.rigidGroups else "flexible"
 
     def make(self, stepFs, floor, seed):
         """(system, integrator) for a step of stepFs fs."""
@@ -109,9 +120,10 @@ class Configuration:
 
 def configurations(quick):
     if quick:
-        return [Configuration("stock LangevinMiddle", [2], stock=True),
+        return [Configuration("stock LangevinMiddle", [2], stock=True, reference=True),
                 Configuration("rigid X-H + MTS (2 fs)", [6], rigidGroups=True, substepFs=2.0)]
-    return [Configuration("stock LangevinMiddle", [2], stock=True),
+    return [Configuration("stock LangevinMiddle", [2], stock=True, reference=True),
+            Configuration("rigid X-H groups, model reference", [2], rigidGroups=True, reference=True),
             Configuration("stock LangevinMiddle, HMR 3 amu", [4], stock=True, hmr=True),
             Configuration("rigid X-H groups", [4, 5, 6], rigidGroups=True),
             Configuration("MTS (bonded 2 fs)", [4, 6, 8], substepFs=2.0),
@@ -156,7 +168,7 @@ def plot(rows, path):
         axes[0].errorbar(steps, [row["U_bias"] for row in mine], yerr=[row["U_error"] for row in mine], marker="o", label=label)
         axes[1].errorbar(steps, [row["bonded_bias"] for row in mine], yerr=[row["bonded_error"] for row in mine], marker="o",
                          label=label)
-    for axis, title in zip(axes, ("U - U(stock 2 fs) (kJ/mol)", "bonded U - reference (kJ/mol)")):
+    for axis, title in zip(axes, ("U - U(reference) (kJ/mol)", "bonded U - U(reference) (kJ/mol)")):
         axis.axhline(0.0, color="grey", lw=0.8)
         axis.set_xlabel("outer step (fs)")
         axis.set_ylabel(title)
@@ -170,44 +182,68 @@ def main():
     parser.add_argument("--equilibrate", type=float, help="ps discarded per run (default 1; quick 0.1)")
     parser.add_argument("--floor", type=float, default=0.04, help="minimum moment of inertia, amu nm^2 (default 0.04)")
     parser.add_argument("--repetitions", type=int, default=5, help="timed blocks per configuration (default 5)")
+    parser.add_argument("--seeds", type=int, default=1, help="independent runs per configuration and step (default 1): "
+                        "with 2 or more, the error of a mean is the standard error of the runs' means")
+    parser.add_argument("--only", nargs="+", help="run only the configurations whose labels contain one of these")
+    parser.add_argument("--name", default="protein_mts", help="the results document's name (default protein_mts)")
     parser.add_argument("--quick", action="store_true")
     parser.add_argument("--platform", default="CPU")
     parser.add_argument("--threads", type=int, help="CPU platform threads (default: the platform's)")
     args = parser.parse_args()
     args.time = args.time or (0.5 if args.quick else 4.0)
     args.equilibrate = args.equilibrate or (0.1 if args.quick else 1.0)
-    platform, properties, document = openRun("protein_mts", "A solvated protein: multiple time steps and rigid X-H groups", args)
+    platform, properties, document = openRun(args.name, "A solvated protein: multiple time steps and rigid X-H groups", args)
     started = time.time()
     state = startingState(args, platform, properties)
-    rows, table, timed, reference = [], [], {}, None
-    for config in configurations(args.quick):
+    rows, table, timed, references = [], [], {}, {}
+    chosen = [config for config in configurations(args.quick)
+              if not args.only or config.reference and config.model == "flexible" or any(word in config.label for word in args.only)]
+    for config in chosen:
         for stepFs in config.steps:
             stamp(f"{config.label} at {stepFs:g} fs")
-            result = run(config, stepFs, state, args, platform, properties, seed=7)
+            runs = [run(config, stepFs, state, args, platform, properties, seed=7 + k) for k in range(args.seeds)]
             row = dict(configuration=config.label, step_fs=stepFs, failure="", U=None, U_bias=None, U_error=None,
                        bonded_bias=None, bonded_error=None, T=None)
-            if isinstance(result, str):
-                row["failure"] = result
-                table.append([config.label, f"{stepFs:g}", "", "", "", result])
+            failures = [result for result in runs if isinstance(result, str)]
+            if failures:
+                row["failure"] = f"{len(failures)} of {len(runs)} runs: {failures[0]}"
+                table.append([config.label, f"{stepFs:g}", "", "", "", "", row["failure"]])
                 rows.append(row)
                 say(" | ".join(table[-1]))
                 break
-            samples, context, integrator = result
-            means = [blockMean(samples[:, k]) for k in range(3)]
-            if reference is None:
-                reference = means
-            (u, uError), (b, bError), (t, _) = [(m[0], m[1]) for m in means]
+            # Per run, block means; over runs, the mean of the runs' means with the standard error of their spread.
+            perRun = np.array([[blockMean(samples[:, k]) for k in range(3)] for samples, _, _ in runs])  # (runs, 3, 2)
+            if len(runs) > 1:
+                means = [(perRun[:, k, 0].mean(), perRun[:, k, 0].std(ddof=1)/np.sqrt(len(runs))) for k in range(3)]
+            else:
+                means = [tuple(perRun[0, k]) for k in range(3)]
+            if config.reference:
+                references[config.model] = means
+            reference = references.get(config.model, references.get("flexible"))
+            against = "stock 2 fs" if config.model not in references or config.model == "flexible" else "rigid X-H 2 fs"
+            (u, uError), (b, bError), (t, _) = means
             uBias, uBiasError = u - reference[0][0], float(np.hypot(uError, reference[0][1]))
             bBias, bBiasError = b - reference[1][0], float(np.hypot(bError, reference[1][1]))
             row.update(U=u, U_bias=uBias, U_error=uBiasError, bonded_bias=bBias, bonded_error=bBiasError, T=t)
             rows.append(row)
-            table.append([config.label, f"{stepFs:g}", f"{uBias:+.0f} +- {uBiasError:.0f}", f"{bBias:+.1f} +- {bBiasError:.1f}",
-                          f"{t:.1f}", ""])
+            table.append([config.label, f"{stepFs:g}", against, f"{uBias:+.0f} +- {uBiasError:.0f}",
+                          f"{bBias:+.1f} +- {bBiasError:.1f}", f"{t:.1f}", ""])
             say(" | ".join(table[-1]))
+            _, context, integrator = runs[-1]
             timed[f"{config.label}, {stepFs:g} fs"] = (stepFs, context, integrator)
-    document.section("Accuracy", f"{args.time:g} ps sampled per run after {args.equilibrate:g} ps; U bias against stock "
-                     f"LangevinMiddle at 2 fs (mean U {reference[0][0]:.0f} kJ/mol); floor {args.floor:g} amu nm^2.")
-    document.table(["configuration", "step (fs)", "U bias (kJ/mol)", "bonded U bias (kJ/mol)", "T (K)", "failed"], table)
+    flexible = references["flexible"]
+    rigidShift = ""
+    if "rigid X-H" in references:
+        shift = references["rigid X-H"][0][0] - flexible[0][0]
+        rigidShift = (f" The rigid X-H model itself (its reference at 2 fs) differs from the flexible one by "
+                      f"{shift:+.0f} kJ/mol in U: rows of rigid X-H groups are measured against it.")
+    runsText = f"{args.seeds} independent runs" if args.seeds > 1 else "one run"
+    document.section("Accuracy", f"{runsText} per row, {args.time:g} ps sampled per run after {args.equilibrate:g} ps; "
+                     f"bias of the mean U and of the solute's bonded energy against the reference of the same model "
+                     f"(stock LangevinMiddle at 2 fs: mean U {flexible[0][0]:.0f} kJ/mol); floor {args.floor:g} amu nm^2."
+                     + rigidShift)
+    document.table(["configuration", "step (fs)", "against", "U bias (kJ/mol)", "bonded U bias (kJ/mol)", "T (K)", "failed"],
+                   table)
 
     stamp("timing, interleaved")
     integrators = {label: integrator for label, (_, _, integrator) in timed.items()}
