@@ -241,15 +241,16 @@ class ResultsDocument:
         return self.path
 
 
-def openRun(name, title, args):
+def openRun(name, title, args, script=None):
     """The start of a benchmark's main(): its log in benchmarks/results/<name>.log, the platform
     args.platform with args.threads CPU threads (None: the platform's default) and the ResultsDocument
-    <name> titled title (a quick run's in benchmarks/results/), whose method is the script's docstring.
+    <name> titled title (a quick run's in benchmarks/results/), whose method is the docstring of the script
+    benchmarks/<script>.py (script: name unless given).
     Returns (platform, Context properties, document)."""
     openLog(RESULTS/f"{name}.log")
     platform = openmm.Platform.getPlatformByName(args.platform)
     document = ResultsDocument(name, title, quick=args.quick, platform=args.platform, threads=args.threads,
-                               about=f"Method: the docstring of `benchmarks/{name}.py`.")
+                               about=f"Method: the docstring of `benchmarks/{script or name}.py`.")
     return platform, cpuProperties(platform, args.threads), document
 
 

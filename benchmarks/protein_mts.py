@@ -192,7 +192,8 @@ def main():
     args = parser.parse_args()
     args.time = args.time or (0.5 if args.quick else 4.0)
     args.equilibrate = args.equilibrate or (0.1 if args.quick else 1.0)
-    platform, properties, document = openRun(args.name, "A solvated protein: multiple time steps and rigid X-H groups", args)
+    platform, properties, document = openRun(args.name, "A solvated protein: multiple time steps and rigid X-H groups", args,
+                                             script="protein_mts")
     started = time.time()
     state = startingState(args, platform, properties)
     rows, table, timed, references = [], [], {}, {}
@@ -264,8 +265,8 @@ def main():
     for row in rows:
         match = [ns for label, ns in speed if label == f"{row['configuration']}, {row['step_fs']:g} fs"]
         row["ns_per_day"] = match[0] if match else None
-    writeCsv(RESULTS/"protein_mts.csv", rows)
-    path = document.figurePath("protein_mts.png")
+    writeCsv(RESULTS/f"{args.name}.csv", rows)
+    path = document.figurePath(f"{args.name}.png")
     plot(rows, path)
     document.figure(path, "Bias of U and of the bonded energy against the outer step")
     document.write()
