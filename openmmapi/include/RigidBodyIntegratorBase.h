@@ -131,7 +131,9 @@ public:
      * of the nest (BAOAB with the inner levels inside the drifts); its velocities between steps then
      * lack half a kick of the slowest forces only. The groups listed replace the integration force
      * groups (setIntegrationForceGroups()): forces in groups not listed are not integrated. An empty
-     * list (the default) is one level of the integration force groups. Set it before the integrator
+     * list (the default) is one level of the integration force groups; setting it empty after a list
+     * keeps the groups that list made the integration force groups (call setIntegrationForceGroups()
+     * to change them). Set it before the integrator
      * is bound to a Context.
      *
      * @param groupSubsteps  (force group, substeps) pairs: groups 0 to 31, each once; the slowest

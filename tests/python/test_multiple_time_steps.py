@@ -263,6 +263,18 @@ def test_changes_once_bound_and_other_integration_groups_are_refused(mixed):
     assert np.all(np.isfinite(positions_of(context)))
 
 
+def test_an_empty_list_keeps_the_groups_the_last_list_made(mixed):
+    """setForceGroupSubsteps([]) after a list goes back to one level, of the integration force groups that
+    list set (its groups' union), which setIntegrationForceGroups() may then change."""
+    integrator = make("langevin", 0.002, mixed.bodies, [(0, 1), (FAST_GROUP, 2)])
+    assert integrator.getIntegrationForceGroups() == (1 << 0) | (1 << FAST_GROUP)
+    integrator.setForceGroupSubsteps([])
+    assert integrator.getForceGroupSubsteps() == []
+    assert integrator.getIntegrationForceGroups() == (1 << 0) | (1 << FAST_GROUP)
+    integrator.setIntegrationForceGroups({0})  # one level again: any groups
+    assert integrator.getIntegrationForceGroups() == 1
+
+
 def test_compound_integrator_steps_as_the_integrator_alone(mixed):
     """Inside a CompoundIntegrator (with a stock VerletIntegrator beside it, never stepped here) the
     nest is the same, bit for bit on Reference; after the other integrator moved the particles, the
