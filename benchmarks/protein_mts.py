@@ -17,8 +17,13 @@ solute's bonded energy, group 1) must agree with the reference, stock ``Langevin
   waters' moments raised to ``--floor``;
 - both together: rigid X-H groups with raised moments and the bonded forces in substeps.
 
-Rigid X-H groups fix the H-X-H angles, a model change: their rows are measured against the same model at
-2 fs ("rigid X-H groups, model reference"), the others against stock at 2 fs.
+- the best stock recipe, without this plugin (``stockRecipe()``, a CustomIntegrator): H-X-H and H-O-X
+  angles constrained (``constraints=HAngles``), HMR 3 amu, water hydrogens made heavy (O 10, H 4 amu),
+  the bonded forces in 2 fs substeps of velocity Verlet and the Ornstein-Uhlenbeck stage once, at the
+  outer step's midpoint.
+
+Rigid X-H groups fix the H-X-H angles, and the stock recipe constrains them: model changes, so their rows
+are measured against the same model at 2 fs ("model reference" rows), the others against stock at 2 fs.
 
 Each run starts from one equilibrated state (stock 2 fs, kept in benchmarks/results/), draws its
 velocities, discards ``--equilibrate`` ps and samples every 0.1 ps for ``--time`` ps. A configuration
@@ -52,8 +57,9 @@ BONDED = (openmm.HarmonicBondForce, openmm.HarmonicAngleForce, openmm.PeriodicTo
 KJ = unit.kilojoule_per_mole
 
 
-def build(hydrogenMass=None):
-    """(topology, positions, system): villin in TIP3P, bonded forces in group 1."""
+def build(hydrogenMass=None, constraints=app.HBonds, heavyWaterHydrogens=False):
+    """(topology, positions, system): villin in TIP3P, bonded forces in group 1; with heavyWaterHydrogens
+    each water's O weighs 10 amu and its H 4 amu (the mass OpenMM no longer moves to water hydrogens)."""
     import os
     pdb = app.PDBFile(os.path.join(os.path.dirname(app.__file__), "data", "test.pdb"))
     forcefield = app.ForceField("amber14-all.xml", "amber14/tip3p.xml")
@@ -61,13 +67,54 @@ def build(hydrogenMass=None):
     modeller.deleteWater()
     modeller.addHydrogens(forcefield)
     modeller.addSolvent(forcefield, model="tip3p", padding=0.9*unit.nanometer)
-    options = dict(nonbondedMethod=app.PME, nonbondedCutoff=0.9*unit.nanometer, constraints=app.HBonds, rigidWater=True)
+    options = dict(nonbondedMethod=app.PME, nonbondedCutoff=0.9*unit.nanometer, constraints=constraints, rigidWater=True)
     if hydrogenMass:
         options["hydrogenMass"] = hydrogenMass*unit.amu
     system = forcefield.createSystem(modeller.topology, **options)
     for force in system.getForces():
         force.setForceGroup(1 if isinstance(force, BONDED) else 0)
+    if heavyWaterHydrogens:
+        for residue in modeller.topology.residues():
+            if residue.name == "HOH":
+                for atom in residue.atoms():
+                    system.setParticleMass(atom.index, (10.0 if atom.element.symbol == "O" else 4.0)*unit.amu)
     return modeller.topology, modeller.positions, system
+
+
+def stockRecipe(stepFs, substeps):
+    """The best stock recipe, a CustomIntegrator: the bonded forces (group 1) in `substeps` inner steps of
+    velocity Verlet, the rest (group 0) kicking at the outer step, one Ornstein-Uhlenbeck stage at the outer
+    midpoint (V0 [V1 R V1]^(n/2) O [V1 R V1]^(n/2) V0), constraints on positions after each drift and on
+    velocities after each kick; on-step velocities."""
+    dt, half = stepFs*1e-3, substeps//2
+    h = dt/substeps
+    integrator = openmm.CustomIntegrator(dt)
+    kT = (unit.MOLAR_GAS_CONSTANT_R*TEMPERATURE*unit.kelvin).value_in_unit(KJ)
+    integrator.addGlobalVariable("a", np.exp(-FRICTION*dt))
+    integrator.addGlobalVariable("b", np.sqrt(1.0 - np.exp(-2.0*FRICTION*dt)))
+    integrator.addGlobalVariable("kT", kT)
+    integrator.addPerDofVariable("x1", 0.0)
+    integrator.addUpdateContextState()
+
+    def kick(group, time):
+        integrator.addComputePerDof("v", f"v + {time}*f{group}/m")
+        integrator.addConstrainVelocities()
+
+    def inner(count):
+        for _ in range(count):
+            kick(1, 0.5*h)
+            integrator.addComputePerDof("x", f"x + {h}*v")
+            integrator.addComputePerDof("x1", "x")
+            integrator.addConstrainPositions()
+            integrator.addComputePerDof("v", f"v + (x - x1)/{h}")
+            kick(1, 0.5*h)
+    kick(0, 0.5*dt)
+    inner(half)
+    integrator.addComputePerDof("v", "a*v + b*sqrt(kT/m)*gaussian")
+    integrator.addConstrainVelocities()
+    inner(substeps - half)
+    kick(0, 0.5*dt)
+    return integrator
 
 
 def startingState(args, platform, properties):
@@ -89,19 +136,25 @@ def startingState(args, platform, properties):
 
 
 class Configuration:
-    def __init__(self, label, steps, stock=False, hmr=False, rigidGroups=False, substepFs=None, reference=False):
+    def __init__(self, label, steps, stock=False, hmr=False, rigidGroups=False, substepFs=None, reference=False,
+                 hAngles=False):
         self.label, self.steps, self.stock, self.hmr = label, steps, stock, hmr
-        self.rigidGroups, self.substepFs, self.reference = rigidGroups, substepFs, reference
+        self.rigidGroups, self.substepFs, self.reference, self.hAngles = rigidGroups, substepFs, reference, hAngles
 
     @property
     def model(self):
         """Which configurational distribution the configuration samples: rigid X-H groups fix the H-X-H
         angles (a model change), so they are measured against their own small-step reference."""
-        return "rigid X-H" if self.rigidGroups else "flexible"
+        return "rigid X-H" if self.rigidGroups else "H angles" if self.hAngles else "flexible"
 
     def make(self, stepFs, floor, seed):
         """(system, integrator) for a step of stepFs fs."""
-        topology, _, system = build(3.0 if self.hmr else None)
+        if self.hAngles:  # the stock recipe's model: H-X-H and H-O-X angles constrained, HMR, heavy water hydrogens
+            topology, _, system = build(3.0, app.HAngles, heavyWaterHydrogens=True)
+            if self.substepFs:
+                return system, stockRecipe(stepFs, max(2, int(round(stepFs/self.substepFs))))
+        else:
+            topology, _, system = build(3.0 if self.hmr else None)
         if self.stock:
             integrator = openmm.LangevinMiddleIntegrator(TEMPERATURE, FRICTION, stepFs*1e-3)
             integrator.setRandomNumberSeed(seed)
@@ -125,6 +178,9 @@ def configurations(quick):
     return [Configuration("stock LangevinMiddle", [2], stock=True, reference=True),
             Configuration("rigid X-H groups, model reference", [2], rigidGroups=True, reference=True),
             Configuration("stock LangevinMiddle, HMR 3 amu", [4], stock=True, hmr=True),
+            Configuration("stock, H angles constrained, model reference", [2], stock=True, hAngles=True, reference=True),
+            Configuration("stock recipe: H angles, heavy water H, bonded 2 fs, O at midpoint", [6, 8, 10], stock=True,
+                          hAngles=True, substepFs=2.0),
             Configuration("rigid X-H groups", [4, 5, 6], rigidGroups=True),
             Configuration("MTS (bonded 2 fs)", [4, 6, 8], substepFs=2.0),
             Configuration("rigid X-H + MTS (bonded 2 fs)", [6, 8, 10, 12], rigidGroups=True, substepFs=2.0)]
@@ -136,6 +192,8 @@ def run(config, stepFs, state, args, platform, properties, seed):
     context = openmm.Context(system, integrator, platform, properties)
     context.setPeriodicBoxVectors(*state.getPeriodicBoxVectors())
     context.setPositions(state.getPositions())
+    if config.hAngles:
+        context.applyConstraints(1e-6)  # the start satisfies HBonds only
     context.setVelocitiesToTemperature(TEMPERATURE, seed)
     stride = max(1, int(round(100.0/stepFs)))
     dof = (rigidDegreesOfFreedom(context, integrator) if not config.stock else
@@ -221,7 +279,8 @@ def main():
             if config.reference:
                 references[config.model] = means
             reference = references.get(config.model, references.get("flexible"))
-            against = "stock 2 fs" if config.model not in references or config.model == "flexible" else "rigid X-H 2 fs"
+            against = ("stock 2 fs" if config.model not in references or config.model == "flexible" else
+                       {"rigid X-H": "rigid X-H 2 fs", "H angles": "H angles 2 fs"}[config.model])
             (u, uError), (b, bError), (t, _) = means
             uBias, uBiasError = u - reference[0][0], float(np.hypot(uError, reference[0][1]))
             bBias, bBiasError = b - reference[1][0], float(np.hypot(bError, reference[1][1]))
