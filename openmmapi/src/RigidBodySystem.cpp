@@ -17,16 +17,6 @@ using namespace std;
 
 namespace OpenMMRigid {
 
-const char* rigidBodyKindName(int kind) {
-    switch (kind) {
-        case RigidKindPoint: return "point";
-        case RigidKindLinear: return "linear";
-        case RigidKindSpherical: return "spherical";
-        case RigidKindSymmetric: return "symmetric";
-        default: return "asymmetric";
-    }
-}
-
 StepGeometry::StepGeometry() : displacementLimit(numeric_limits<double>::infinity()) {
 }
 

@@ -120,7 +120,7 @@ def _loadKernels():
 
 
 def _mostDerived(integrator):
-    """integrator as a RigidBodyIntegrator or RigidBodyLangevinIntegrator if its C++ object is one (the
+    """integrator as a RigidBodyIntegrator, RigidBodyBussiIntegrator or RigidBodyLangevinIntegrator if its C++ object is one (the
     new proxy takes over its ownership); any other integrator unchanged."""
     if type(integrator) not in (openmm.Integrator, RigidBodyIntegratorBase):  # already the right class, or another
         return integrator

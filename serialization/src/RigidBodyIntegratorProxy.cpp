@@ -3,7 +3,6 @@
 #include "RigidBodyBussiIntegratorProxy.h"
 #include "RigidBodyIntegrator.h"
 #include "RigidIntegratorSerialization.h"
-#include "openmm/OpenMMException.h"
 #include "openmm/serialization/SerializationNode.h"
 #include <memory>
 #include <string>
@@ -22,13 +21,6 @@ namespace {
  */
 const int CURRENT_VERSION = 5;
 const int CURRENT_BUSSI_VERSION = 1;
-
-void checkVersion(const SerializationNode& node, const string& type, int current) {
-    int version = node.getIntProperty("version");
-    if (version < 1 || version > current)
-        throw OpenMMException(type + ": serialization version " + to_string(version) + " is not one this build reads (1 to " +
-                              to_string(current) + ")");
-}
 
 /** The settings RigidBodyIntegrator and RigidBodyBussiIntegrator have in common. */
 void serializeSplitting(const RigidBodyIntegrator& integrator, SerializationNode& node) {
@@ -66,7 +58,7 @@ void RigidBodyIntegratorProxy::serialize(const void* object, SerializationNode& 
 }
 
 void* RigidBodyIntegratorProxy::deserialize(const SerializationNode& node) const {
-    checkVersion(node, "RigidBodyIntegrator", CURRENT_VERSION);
+    checkSerializationVersion(node, "RigidBodyIntegrator", CURRENT_VERSION);
     unique_ptr<RigidBodyIntegrator> integrator;
     if (node.getBoolProperty("thermostat", false))
         integrator.reset(readBussi(node, "thermostatTemperature", "thermostatCollisionTime"));
@@ -94,7 +86,7 @@ void RigidBodyBussiIntegratorProxy::serialize(const void* object, SerializationN
 }
 
 void* RigidBodyBussiIntegratorProxy::deserialize(const SerializationNode& node) const {
-    checkVersion(node, "RigidBodyBussiIntegrator", CURRENT_BUSSI_VERSION);
+    checkSerializationVersion(node, "RigidBodyBussiIntegrator", CURRENT_BUSSI_VERSION);
     unique_ptr<RigidBodyIntegrator> integrator(readBussi(node, "temperature", "collisionTime"));
     readSettings(node, *integrator);
     return static_cast<Integrator*>(integrator.release());

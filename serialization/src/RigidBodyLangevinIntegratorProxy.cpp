@@ -1,7 +1,6 @@
 #include "RigidBodyLangevinIntegratorProxy.h"
 #include "RigidBodyLangevinIntegrator.h"
 #include "RigidIntegratorSerialization.h"
-#include "openmm/OpenMMException.h"
 #include "openmm/serialization/SerializationNode.h"
 #include <memory>
 #include <string>
@@ -32,10 +31,7 @@ void RigidBodyLangevinIntegratorProxy::serialize(const void* object, Serializati
 }
 
 void* RigidBodyLangevinIntegratorProxy::deserialize(const SerializationNode& node) const {
-    int version = node.getIntProperty("version");
-    if (version < 1 || version > CURRENT_VERSION)
-        throw OpenMMException("RigidBodyLangevinIntegrator: unsupported serialization version " + to_string(version) +
-                              " (this library reads versions 1 to " + to_string(CURRENT_VERSION) + ")");
+    checkSerializationVersion(node, "RigidBodyLangevinIntegrator", CURRENT_VERSION);
     double temperature = node.getDoubleProperty("temperature");
     double friction = node.getDoubleProperty("friction");
     double stepSize = node.getDoubleProperty("stepSize");

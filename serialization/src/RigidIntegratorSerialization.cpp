@@ -1,4 +1,5 @@
 #include "RigidIntegratorSerialization.h"
+#include "openmm/OpenMMException.h"
 
 using namespace OpenMM;
 using namespace std;
@@ -16,6 +17,13 @@ const SerializationNode* findChild(const SerializationNode& node, const string& 
 }
 
 } // namespace
+
+void checkSerializationVersion(const SerializationNode& node, const string& type, int current) {
+    int version = node.getIntProperty("version");
+    if (version < 1 || version > current)
+        throw OpenMMException(type + ": serialization version " + to_string(version) + " is not one this build reads (1 to " +
+                              to_string(current) + ")");
+}
 
 void serializeRigidIntegratorBase(const RigidBodyIntegratorBase& integrator, SerializationNode& node) {
     node.setDoubleProperty("stepSize", integrator.getStepSize());

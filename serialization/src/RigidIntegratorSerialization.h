@@ -2,7 +2,7 @@
 #define OPENMMRIGID_RIGIDINTEGRATORSERIALIZATION_H_
 
 /*
- * What the serialization proxies of RigidBodyIntegrator and RigidBodyLangevinIntegrator share: the
+ * What the serialization proxies of the three integrators share: the version check, the
  * settings of RigidBodyIntegratorBase (step size, constraint tolerance, integration force groups,
  * rotation method, minimum moment of inertia) and the explicit bodies,
  *
@@ -17,9 +17,13 @@
 
 #include "RigidBodyIntegratorBase.h"
 #include "openmm/serialization/SerializationNode.h"
+#include <string>
 #include <vector>
 
 namespace OpenMMRigid {
+
+/** An OpenMMException naming `type` unless the node's version is one this build reads, 1 to `current`. */
+void checkSerializationVersion(const OpenMM::SerializationNode& node, const std::string& type, int current);
 
 /** Write the step size, constraint tolerance, integration force groups, rotation method, minimum moment of inertia and explicit bodies. */
 void serializeRigidIntegratorBase(const RigidBodyIntegratorBase& integrator, OpenMM::SerializationNode& node);

@@ -13,9 +13,6 @@
 
 namespace OpenMMRigid {
 
-/** The name of a body's kind (a RigidKind of the numerics core): "point", "linear", "spherical", "symmetric" or "asymmetric". */
-OPENMM_EXPORT_RIGID const char* rigidBodyKindName(int kind);
-
 /**
  * The periodic box and the largest plausible drift at one moment: what a fit needs to assemble a body
  * split by the boundary, and what a drift needs to tell a blow-up from a step.
