@@ -341,15 +341,12 @@ class RigidStateDataReporter(app.StateDataReporter):
                              f"{' and '.join(measured)} need{'' if len(measured) > 1 else 's'} the integrator to "
                              f"measure {'them' if len(measured) > 1 else 'it'}; call "
                              f"integrator.setMeasureShadowWork(True) before the steps")
-        if rigid and (self._kineticColumns or self._temperature):
+        # The temperature column needs nothing here: the stock reporter asks computeSystemTemperature().
+        if self._kineticColumns:
             state = simulation.context.getState(getPositions=True)
             positions = np.asarray(state.getPositions(asNumpy=True).value_in_unit(unit.nanometer))
             box = np.asarray(state.getPeriodicBoxVectors(asNumpy=True).value_in_unit(unit.nanometer))
             self._bodies = _Bodies(simulation.system, integrator, positions, box)
-            if self._temperature:
-                # The temperature column is computeSystemTemperature()'s (the stock reporter asks the integrator);
-                # the count it divides by, in place of the stock count of 3 per particle less the constraints.
-                self._dof = self._bodies.translationalDof + self._bodies.rotationalDof
 
     def _insertionIndex(self):
         return sum(1 for name in _STOCK_COLUMNS_BEFORE if getattr(self, name))

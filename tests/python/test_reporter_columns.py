@@ -153,8 +153,11 @@ def test_columns_match_an_independent_computation():
     assert counts == {"point": 2, "linear": 4}
     assert reporter._bodies.translationalDof == 3*25 + 3*2 - 1 - 3 == 77
     assert reporter._bodies.rotationalDof == 3*(25 - 2 - 4) + 2*4 == 65
-    # The stock reporter's count (3 per particle less the constraints) is replaced by the integrator's.
-    assert reporter._dof == 77 + 65
+    # The temperature column divides by the integrator's count, not the stock one (3 per particle less the
+    # constraints), in every row.
+    for row, (state, _) in zip(rows, expected):
+        assert row[2] == pytest.approx(2*state.getKineticEnergy().value_in_unit(KILOJOULES)/((77 + 65)*GAS_CONSTANT),
+                                       rel=1e-9)
 
 
 @pytest.fixture(scope="module")
