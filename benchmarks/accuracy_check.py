@@ -34,8 +34,6 @@ process's CPU time.
     python benchmarks/accuracy_check.py --cost            # about 5 minutes (one thread)
 """
 
-import sys
-import os
 import argparse
 import re
 import time
@@ -48,7 +46,6 @@ from openmm import unit
 import benchmarking
 from benchmarking import say, stamp
 import openmmrigid
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, "tests", "python"))  # rigidtesting
 from rigidtesting import waterBox
 
 KJ = unit.kilojoule_per_mole

@@ -30,12 +30,11 @@ from pathlib import Path
 
 import numpy as np
 import openmm
-from openmm import unit
 
 import openmmrigid
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, "tests", "python"))  # rigidtesting
-from rigidtesting.bodies import (bodyKind, bodyKinds, integratorBodies, kineticEnergies, principalMoments,  # noqa: F401
-                                 rigidDegreesOfFreedom, rigidKineticEnergies, systemMasses)
+from rigidtesting.bodies import (bodyKind, bodyKinds, integratorBodies, kineticEnergies,  # noqa: F401
+                                 rigidDegreesOfFreedom, rigidKineticEnergies)
 from rigidtesting.stress import block_drift
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -52,7 +52,6 @@ benchmarks/results/) with its figures <name>_drift.png, <name>_fluctuation.png a
 <output>_equal_accuracy.csv and <output>.log. Measured results: docs/results/energy_drift.md.
 """
 
-import sys
 import argparse
 import dataclasses
 import datetime
@@ -74,7 +73,6 @@ from benchmarking import (RESULTS, Progress, ResultsDocument, cpuProperties, for
 
 plt = pyplot()
 import matplotlib.ticker  # noqa: E402 (after pyplot() chose the backend)
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, "tests", "python"))  # rigidtesting
 import rigidtesting
 
 TEMPERATURE = 300.0  # K

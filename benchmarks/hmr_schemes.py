@@ -36,7 +36,6 @@ benchmarks/results/), and <output>.csv and <output>.log (a copy of what is print
 
 import argparse
 import os
-import sys
 import time
 from pathlib import Path
 
@@ -47,7 +46,6 @@ from openmm import app, unit
 import openmmrigid
 from benchmarking import (RESULTS, ResultsDocument, cpuProperties, header, openLog, rigidDegreesOfFreedom, say, stamp,
                           writeCsv)
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, "tests", "python"))  # rigidtesting
 import rigidtesting
 
 SAMPLE_FS = 48  # a multiple of 4, 6 and 8 fs

@@ -34,7 +34,6 @@ Writes docs/results/<name>.md (the name of --output, default intrabody_cost; a q
 benchmarks/results/), and <output>.csv and <output>.log (a copy of what is printed).
 """
 
-import sys
 import argparse
 import os
 import statistics
@@ -47,7 +46,6 @@ from openmm import app, unit
 
 import openmmrigid
 from benchmarking import RESULTS, ResultsDocument, header, openLog, say, stamp, writeCsv
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, "tests", "python"))  # rigidtesting
 import rigidtesting
 
 KJ = unit.kilojoule_per_mole

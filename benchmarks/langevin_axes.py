@@ -27,8 +27,6 @@ which is what this measures. Stronger friction pulls it back towards the bath's.
 Writes docs/results/langevin_axes.md (a quick run: benchmarks/results/) and a figure.
 """
 
-import sys
-import os
 import argparse
 import time
 
@@ -37,10 +35,9 @@ import openmm
 from openmm import unit
 
 import openmmrigid
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, "tests", "python"))  # rigidtesting
-import rigidtesting
 from benchmarking import (RESULTS, blockMean, openRun, principalKineticEnergies, pyplot, saveFigure, say, stamp,
                           writeCsv)
+import rigidtesting
 
 TEMPERATURE = 300.0
 BOLTZMANN = unit.MOLAR_GAS_CONSTANT_R.value_in_unit(unit.kilojoule_per_mole/unit.kelvin)

@@ -55,8 +55,6 @@ openmmtools' VRORV (BAOAB) measures. Without that correction (as in the first re
 2026-12-02) the end terms, of first order in the step, gave error bars 5 to 10 times VRORV's.
 """
 
-import sys
-import os
 import argparse
 import datetime
 import shutil
@@ -70,7 +68,6 @@ from openmm import app, unit
 import benchmarking
 from benchmarking import say, stamp
 import openmmrigid
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, "tests", "python"))  # rigidtesting
 from rigidtesting import alanineDipeptide, waterBox
 from rigidtesting.samplingerror import configurationKL
 import rigidtesting

@@ -31,8 +31,6 @@ Writes docs/results/step_cap.md and docs/figures/step_cap_<system>.png (a quick 
 and benchmarks/results/step_cap.csv.
 """
 
-import sys
-import os
 import argparse
 import collections
 import math
@@ -46,10 +44,9 @@ import openmm
 from openmm import unit
 
 import openmmrigid
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, "tests", "python"))  # rigidtesting
-import rigidtesting
 from benchmarking import (RESULTS, accuracyWarnings, blockMean, openRun, principalKineticEnergies, pyplot,
                           rigidDegreesOfFreedom, saveFigure, say, stamp, writeCsv)
+import rigidtesting
 import inertia_sampling
 from nvt_accuracy import BOLTZMANN, FRICTION, TEMPERATURE
 

@@ -39,7 +39,6 @@ benchmarks/results/step_cost.md instead), and benchmarks/results/step_cost.csv, 
 (step_cost_OpenCL_mixed.md, ...).
 """
 
-import os
 import argparse
 import datetime
 import math
@@ -57,7 +56,6 @@ from benchmarking import (RESULTS, ResultsDocument, blockSteps, bodyKinds, heade
 
 plt = pyplot()
 import matplotlib.ticker  # noqa: E402 (after pyplot() chose the backend)
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, "tests", "python"))  # rigidtesting
 import rigidtesting
 
 STEP = 2*unit.femtosecond

@@ -50,7 +50,6 @@ Exits with status 1 if any criterion fails. Writes docs/results/stress.md (the s
 run: benchmarks/results/stress.md) and a copy of the output to benchmarks/results/stress.log.
 """
 
-import os
 import argparse
 import sys
 import time
@@ -59,7 +58,6 @@ import numpy as np
 import openmm
 
 from benchmarking import RESULTS, ResultsDocument, closeLog, header, openLog, say
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, "tests", "python"))  # rigidtesting
 from rigidtesting import stress
 from rigidtesting import stress as systems  # the cluster, exact rigid motion and state helpers
 import rigidtesting

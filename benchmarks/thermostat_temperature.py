@@ -28,8 +28,6 @@ Writes docs/results/thermostat_temperature.md (a quick run: benchmarks/results/)
 benchmarks/results/thermostat_temperature.csv and .log.
 """
 
-import sys
-import os
 import argparse
 import time
 
@@ -40,7 +38,6 @@ from openmm import app, unit
 import openmmrigid
 from benchmarking import (RESULTS, blockMean, integratorBodies, rigidKineticEnergies, molecularKineticEnergies, openRun,
                           say, stamp, writeCsv)
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, "tests", "python"))  # rigidtesting
 import rigidtesting
 
 TEMPERATURE = 300.0

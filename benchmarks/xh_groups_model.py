@@ -45,7 +45,6 @@ the results document is docs/results/xh_groups_model.md, whose section "Reading"
 is carried over when the document is written again (check it against the new numbers).
 """
 
-import sys
 import argparse
 import os
 import time
@@ -58,7 +57,6 @@ from openmm import app, unit
 import benchmarking
 import openmmrigid
 from benchmarking import say, stamp
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, "tests", "python"))  # rigidtesting
 import rigidtesting
 
 NAME = "xh_groups_model"

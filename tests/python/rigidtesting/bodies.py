@@ -18,13 +18,10 @@ import numpy as np
 import openmm
 from openmm import unit
 
+from rigidtesting import particleMasses
+
 LINEAR_TOLERANCE = 0.002  # nm: RigidBodySystem::LinearTolerance
 EQUAL_MOMENTS = 1e-10     # relative to the largest moment; below it a moment is zero
-
-
-def systemMasses(system):
-    """The particle masses of a System (amu), as an array."""
-    return np.array([system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles())])
 
 
 def integratorBodies(integrator):
@@ -92,7 +89,7 @@ def bodyKinds(context, integrator, positions=None):
     """The kind of each body of a rigid-body integrator bound to the Context, from the Context's positions or
     from `positions` (particles x 3, nm, a Quantity or not: those the Context was given, exact where a
     single-precision platform would round them)."""
-    masses = systemMasses(context.getSystem())
+    masses = particleMasses(context.getSystem())
     x, _, box = _stateArrays(context)
     if positions is not None:
         x = np.asarray(positions.value_in_unit(unit.nanometer) if unit.is_quantity(positions) else positions, dtype=float)
@@ -140,9 +137,9 @@ def kineticEnergies(positions, velocities, masses, bodies, minimumMoment=0.0, bo
 
 def rigidKineticEnergies(context, integrator, bodies=None, masses=None):
     """kineticEnergies() of the Context's State with the integrator's bodies and minimum moment (bodies and
-    masses: integratorBodies() and systemMasses(), to spare finding them at every sample)."""
+    masses: integratorBodies() and particleMasses(), to spare finding them at every sample)."""
     x, v, box = _stateArrays(context, velocities=True)
-    return kineticEnergies(x, v, systemMasses(context.getSystem()) if masses is None else masses,
+    return kineticEnergies(x, v, particleMasses(context.getSystem()) if masses is None else masses,
                            integratorBodies(integrator) if bodies is None else bodies,
                            integrator.getMinimumMomentOfInertia(), box)
 
@@ -151,7 +148,7 @@ def rigidDegreesOfFreedom(context, integrator):
     """3 per free particle less one per constraint between free particles, 3 + (0, 2 or 3) per body (one
     particle, linear, other), less 3 with a CMMotionRemover."""
     system = context.getSystem()
-    masses = systemMasses(system)
+    masses = particleMasses(system)
     free = masses > 0
     for body in integratorBodies(integrator):
         free[body] = False
