@@ -606,13 +606,18 @@ class Study:
         self.options = options or {}   # extra command-line options: {"--name": dict(argparse keywords)}
 
     def jobs(self, quick):
-        """The jobs of the grid (dicts, seed excluded) in order, and the seeds."""
-        grid = dict(self.quickGrid if quick else self.grid)
-        seeds = list(grid.pop("seed", [0]))
-        jobs = [{}]
-        for axis, values in grid.items():
-            jobs = [dict(job, **{axis: value}) for job in jobs for value in values]
-        return jobs, seeds
+        """The jobs (dicts, seed excluded), in order, each with its seeds: [(job, seeds)]. A grid is a
+        dict of axes (every combination) or a list of such dicts (their union, in order)."""
+        grids = self.quickGrid if quick else self.grid
+        result = []
+        for grid in grids if isinstance(grids, list) else [grids]:
+            grid = dict(grid)
+            seeds = list(grid.pop("seed", [0]))
+            jobs = [{}]
+            for axis, values in grid.items():
+                jobs = [dict(job, **{axis: value}) for job in jobs for value in values]
+            result += [(job, seeds) for job in jobs if jobKey(job) not in {jobKey(other) for other, _ in result}]
+        return result
 
 
 def jobKey(job):
@@ -621,6 +626,7 @@ def jobKey(job):
 
 def _blockers(jobs):
     """The keys whose failure stops each job: the same job at smaller steps."""
+    jobs = [job for job, _ in jobs]
     keys = {}
     for job in jobs:
         if "step" not in job:
@@ -657,20 +663,27 @@ def _worker(name, argv):
     study = loadStudy(name)
     args = parseArguments([study], argv)
     env = Environment(study, args)
-    jobs, seeds = study.jobs(args.quick)
+    jobs = study.jobs(args.quick)
     blockers = _blockers(jobs)
-    byKey = {jobKey(job): job for job in jobs}
+    byKey = {jobKey(job): (job, seeds) for job, seeds in jobs}
     store = SampleStore(env.folder/"store")
     while True:
-        claim = store.claim(list(byKey), len(seeds), lambda key: blockers[key])
+        # Each job is claimed for its own number of seeds: a claim of the largest count leaves the
+        # jobs with fewer seeds to be skipped once they have them all.
+        pending = [key for key, (job, seeds) in byKey.items() if len(store.samples(key)) < len(seeds)]
+        if not pending:
+            return
+        claim = store.claim(pending, max(len(byKey[key][1]) for key in pending), lambda key: blockers[key])
         if claim is None:
             return
         key, missing = claim
+        job, seeds = byKey[key]
+        missing = [index for index in missing if index < len(seeds)]
         try:
             for index in missing:
                 stamp(f"{study.name}: {key} seed={seeds[index]}")
                 try:
-                    sample = study.measure(dict(byKey[key], seed=seeds[index]), env)
+                    sample = study.measure(dict(job, seed=seeds[index]), env)
                 except Unstable as failure:
                     store.fail(key, index, str(failure))
                     say(f"  failed: {failure}")
@@ -681,11 +694,11 @@ def _worker(name, argv):
 
 
 def _collect(study, env):
-    jobs, seeds = study.jobs(env.quick)
+    jobs = study.jobs(env.quick)
     blockers = _blockers(jobs)
     data = SampleStore(env.folder/"store").read()
     results = []
-    for job in jobs:
+    for job, seeds in jobs:
         key = jobKey(job)
         entry = data["jobs"].get(key, {"samples": {}, "failed": None})
         samples = [entry["samples"][str(i)] for i in range(len(seeds)) if str(i) in entry["samples"]]

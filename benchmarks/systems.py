@@ -133,25 +133,11 @@ def withoutBarostat(system):
 # ---------------------------------------------------------------------------------------------------
 # Integrators by name
 
-def velocityVerlet(stepFs):
-    """Velocity Verlet with on-step velocities and constraints (SETTLE for water), as openmmtools'
-    VelocityVerletIntegrator writes it: a CustomIntegrator whose velocities are those of the positions."""
-    integrator = openmm.CustomIntegrator(stepFs*unit.femtoseconds)
-    integrator.addPerDofVariable("x1", 0)
-    integrator.addUpdateContextState()
-    integrator.addComputePerDof("v", "v+0.5*dt*f/m")
-    integrator.addComputePerDof("x", "x+dt*v")
-    integrator.addComputePerDof("x1", "x")
-    integrator.addConstrainPositions()
-    integrator.addComputePerDof("v", "v+0.5*dt*f/m+(x-x1)/dt")
-    integrator.addConstrainVelocities()
-    return integrator
-
-
 INTEGRATORS = {
     "stock-middle": "LangevinMiddleIntegrator + SETTLE",
     "stock-verlet": "VerletIntegrator + SETTLE",
-    "stock-vv": "velocity Verlet + SETTLE (on-step velocities, as openmmtools' VelocityVerletIntegrator)",
+    "stock-vv": "openmmtools VelocityVerletIntegrator + SETTLE (on-step velocities)",
+    "stock-vrorv": "openmmtools LangevinIntegrator, splitting V R O R V, + SETTLE (on-step velocities)",
     "rigid-langevin": "RigidBodyLangevinIntegrator",
     "rigid-verlet": "RigidBodyIntegrator",
     "rigid-bussi": "RigidBodyBussiIntegrator",
@@ -168,7 +154,11 @@ def makeIntegrator(name, stepFs, seed=0, temperature=TEMPERATURE, friction=FRICT
     elif name == "stock-verlet":
         integrator = openmm.VerletIntegrator(dt)
     elif name == "stock-vv":
-        integrator = velocityVerlet(stepFs)
+        from openmmtools.integrators import VelocityVerletIntegrator
+        integrator = VelocityVerletIntegrator(dt)
+    elif name == "stock-vrorv":
+        from openmmtools.integrators import LangevinIntegrator
+        integrator = LangevinIntegrator(temperature*unit.kelvin, friction/unit.picosecond, dt, splitting="V R O R V")
     elif name in ("rigid-langevin", "rigid-verlet", "rigid-bussi"):
         extra = [] if bodies is None else [bodies]
         if name == "rigid-langevin":
