@@ -192,6 +192,12 @@ def header(platform=None, threads=None):
     return lines
 
 
+def shown(path):
+    """A path as a message shows it: relative to the repository where it is inside."""
+    path = Path(path)
+    return path.relative_to(ROOT) if path.is_relative_to(ROOT) else path
+
+
 def markdownTable(columns, rows):
     """Lines of a Markdown table: columns are headings, rows lists of cells (numbers formatted by
     the caller); a column whose cells are all numbers is right-aligned."""
@@ -224,7 +230,7 @@ def saveFigure(figure, path):
     figure.tight_layout()
     figure.savefig(path, dpi=120)
     pyplot().close(figure)
-    say(f"wrote {path.relative_to(ROOT) if path.is_relative_to(ROOT) else path}")
+    say(f"wrote {shown(path)}")
 
 
 # ---------------------------------------------------------------------------------------------------
@@ -712,12 +718,13 @@ def dataPath(study, quick):
     return (RESULTS/"quick" if quick else DATA)/f"{study.name}.json"
 
 
-def runRecord(args, seconds):
+def runRecord(args, seconds, argv):
     """The provenance of this run, as the summary keeps it."""
     return dict(date=f"{datetime.datetime.now().astimezone():%Y-%m-%d %H:%M %Z}", commit=commit(), machine=machine(),
                 software=f"OpenMM {openmm.version.full_version}, openmm-rigid {openmmrigid.__version__}",
                 platform=args.platform + (f", {args.threads} thread(s)" if args.threads else ""),
-                workers=args.workers, minutes=round(seconds/60, 1), load=loadAverage(), command=command())
+                workers=args.workers, minutes=round(seconds/60, 1), load=loadAverage(),
+                command=shlex.join(["python", "benchmarks/run.py"] + list(argv)))
 
 
 def measureStudy(study, args, argv):
@@ -733,11 +740,12 @@ def measureStudy(study, args, argv):
         SampleStore(env.folder/"store", {"study": study.name, "quick": args.quick})
         runWorkers(_worker, (study.name, argv), args.workers)
         summary = study.summarize(_collect(study, env), env)
-    data = {"study": study.name, "runs": [runRecord(args, time.perf_counter() - started)], "summary": summary}
+    # Rounded as stored, so that the page written now is the page the stored summary gives.
+    data = jsonReady({"study": study.name, "runs": [runRecord(args, time.perf_counter() - started, argv)], "summary": summary})
     path = dataPath(study, args.quick)
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(jsonReady(data), indent=1, sort_keys=False) + "\n")
-    say(f"wrote {path.relative_to(ROOT)}")
+    path.write_text(json.dumps(data, indent=1) + "\n")
+    say(f"wrote {shown(path)}")
     return data
 
 
@@ -800,7 +808,7 @@ class Page:
                                          for key, value in run.items() if value not in (None, "")))
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self.path.write_text("\n".join(head + self.lines + tail).rstrip() + "\n")
-        say(f"wrote {self.path.relative_to(ROOT)}")
+        say(f"wrote {shown(self.path)}")
 
 
 def reportStudy(study, quick, data=None):
@@ -808,7 +816,7 @@ def reportStudy(study, quick, data=None):
     if data is None:
         path = dataPath(study, quick)
         if not path.exists():
-            raise SystemExit(f"{study.name}: no summary at {path.relative_to(ROOT)}; run the study first")
+            raise SystemExit(f"{study.name}: no summary at {shown(path)}; run the study first")
         data = json.loads(path.read_text())
     page = Page(study, data, quick)
     study.report(data["summary"], page)

@@ -195,14 +195,16 @@ def context(built, integrator, state, platform, properties, seed=0, system=None)
 # ---------------------------------------------------------------------------------------------------
 # Observables
 
-def waterTemperatures(positions, velocities, built):
-    """Translational and rotational temperature (K) of the rigid waters, from on-step positions and
-    velocities, computed the same way for every integrator: T_trans = 2 K_trans / (3 N k),
-    T_rot = 2 K_rot / (3 N k) with K_rot the sum over principal axes of L_k^2 / (2 I_k)."""
-    from harness import principalKineticEnergies
-    kinetic, axes = principalKineticEnergies(positions, velocities, built.masses, built.waters)
+def waterTemperatures(positions, velocities, built, minimumMoment=0.0, box=None):
+    """Translational and rotational temperature (K) of the rigid waters from positions and velocities
+    (arrays, nm and nm/ps), the same computation for every integrator: T = 2 K / (f k) with f = 3N (less 3
+    for translation with a CMMotionRemover) and K_rot = 1/2 sum_k I'_k w_k^2 about each molecule's
+    principal axes, I'_k its moments raised to minimumMoment (rigidtesting.bodies.kineticEnergies)."""
+    from rigidtesting.bodies import kineticEnergies
+    translational, rotational = kineticEnergies(positions, velocities, built.masses, built.waters, minimumMoment, box)
     n = len(built.waters)
-    return 2*kinetic/(3*n*BOLTZMANN), 2*np.sum(axes)/(3*n*BOLTZMANN), 2*np.asarray(axes)/(n*BOLTZMANN)
+    removed = 3 if any(isinstance(force, openmm.CMMotionRemover) for force in built.system.getForces()) else 0
+    return 2*translational/((3*n - removed)*BOLTZMANN), 2*rotational/(3*n*BOLTZMANN)
 
 
 def stockDegreesOfFreedom(system):

@@ -5,7 +5,8 @@
 #
 #   bash scripts/docs.sh
 #
-# Steps: pip install -r docs/requirements.txt into .venv -> Doxygen (apt-installed as root where it
+# Steps: pip install -r docs/requirements.txt into .venv -> the validation figures from their
+# summaries (benchmarks/run.py all --report) -> Doxygen (apt-installed as root where it
 # is missing) writes the public headers' XML into build/docs/doxygen -> sphinx-build -W --keep-going,
 # from a fresh environment, so that every page is read and every warning reported.
 set -euo pipefail
@@ -33,6 +34,9 @@ fi
 rm -rf build/docs/doxygen
 mkdir -p build/docs/doxygen
 doxygen docs/Doxyfile
+
+# The validation pages' figures, drawn from the committed summaries (benchmarks/data; git ignores them).
+"$python" benchmarks/run.py all --report > /dev/null
 
 # -E: read every page (an incremental build reports the warnings of changed pages only); -q: print
 # only the warnings.

@@ -75,5 +75,9 @@ status=0
 # From the repository root the source tree holds no importable openmmrigid (the sources are in
 # python/), so this tests the installed wheel.
 "$python" -m pytest tests/python -q || status=1
+# Every validation study's smoke run (tiny systems, a few seconds each): the measuring code runs end to
+# end; its output goes to benchmarks/results/quick/, never over the committed summaries and pages.
+"$python" benchmarks/run.py all --quick --threads 2 > build/validation-quick.log 2>&1 ||
+    { tail -n 60 build/validation-quick.log; status=1; }
 bash scripts/docs.sh || status=1  # the manual (docs/), every warning an error
 exit "$status"
