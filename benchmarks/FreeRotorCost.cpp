@@ -20,8 +20,9 @@
  * advance and cycled through; every result is stored and summed into a      *
  * checksum afterwards, so nothing can be optimized away. Each repetition     *
  * times 131072 calls; the median of 9 repetitions is reported (after one     *
- * untimed warm-up). Run it on one core (benchmarks/free_rotor_cost.py pins   *
- * it with taskset).                                                          *
+ * untimed warm-up). Run it on one core (python benchmarks/run.py             *
+ * free_rotor_cost builds it and pins it with taskset). Optional arguments,   *
+ * for a smoke run only: inputs per kind, calls per repetition, repetitions.  *
  *                                                                            *
  * Output: a human-readable table, then one machine-readable line per row:    *
  *   CSV,kind,mode,representation,median_ns,min_ns,max_ns,repetitions,calls   *
@@ -32,6 +33,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <functional>
 #include <random>
@@ -40,9 +42,9 @@
 
 using namespace OpenMMRigid;
 
-static const int INPUTS = 8192;
-static const int CALLS = 131072;  // per repetition, >= 100k
-static const int REPETITIONS = 9;
+static int INPUTS = 8192;        // multiples of RigidLanes
+static int CALLS = 131072;       // per repetition, >= 100k
+static int REPETITIONS = 9;
 
 struct Input {
     Vector3 moments, omega;
@@ -131,7 +133,12 @@ static const char* representationName(FreeRotor::Representation representation) 
            representation == FreeRotor::EllipticIntegral ? "elliptic-integral" : "none";
 }
 
-int main() {
+int main(int argc, char** argv) {
+    if (argc > 3) {
+        INPUTS = std::max(1, std::atoi(argv[1])/RigidLanes)*RigidLanes;
+        CALLS = std::max(1, std::atoi(argv[2])/RigidLanes)*RigidLanes;
+        REPETITIONS = std::max(1, std::atoi(argv[3]));
+    }
     auto anyRotor = [](const FreeRotor&) { return true; };
     auto parameterIn = [](double low, double high) {
         return [=](const FreeRotor& rotor) {

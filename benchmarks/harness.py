@@ -87,29 +87,6 @@ def stamp(text):
     say(f"[{datetime.datetime.now():%H:%M:%S}] {text}")
 
 
-class Progress:
-    """A progress bar for one long loop: redrawn in place on a terminal, a line every 20 % otherwise
-    (into the log)."""
-
-    def __init__(self, label, total):
-        self.label, self.total, self.started, self.shown = label, total, time.perf_counter(), -1
-        self.terminal = sys.stdout.isatty()
-
-    def update(self, done):
-        if done <= 0:
-            return
-        fraction = done/self.total
-        elapsed = time.perf_counter() - self.started
-        left = elapsed*(1 - fraction)/fraction
-        bar = "#"*int(20*fraction) + "-"*(20 - int(20*fraction))
-        text = f"  {self.label} [{bar}] {100*fraction:3.0f} %, {elapsed:.0f} s, about {left:.0f} s left"
-        if self.terminal:
-            print("\r" + text, end="\n" if done >= self.total else "", flush=True)
-        elif int(5*fraction) > self.shown:
-            self.shown = int(5*fraction)
-            say(text)
-
-
 # ---------------------------------------------------------------------------------------------------
 # Provenance
 
@@ -148,48 +125,11 @@ def loadAverage():
         return "unknown"
 
 
-def command():
-    """The command line of this run, as a user would type it from the repository root."""
-    script = Path(sys.argv[0]).resolve()
-    try:
-        script = script.relative_to(ROOT)
-    except ValueError:
-        pass
-    return shlex.join(["python", str(script)] + sys.argv[1:])
-
-
 def cpuProperties(platform, threads):
     """Context properties giving the CPU platform `threads` threads (none for other platforms, or for
     threads None: the platform's default)."""
     name = platform if isinstance(platform, str) else platform.getName()
     return {"Threads": str(threads)} if name == "CPU" and threads else {}
-
-
-def pluginBuild():
-    """When the loaded plugin libraries were built, and a hash of them (the C++ may be rebuilt between runs)."""
-    folder = Path(openmmrigid.__file__).parent
-    digest, newest = hashlib.sha256(), 0.0
-    libraries = sorted(folder.glob("*.so")) + sorted(folder.glob("*.dylib")) + sorted(folder.glob("*.dll"))
-    for library in libraries:
-        digest.update(library.read_bytes())
-        newest = max(newest, library.stat().st_mtime)
-    if not libraries:
-        return "no libraries found"
-    return f"built {datetime.datetime.fromtimestamp(newest):%Y-%m-%d %H:%M}, sha256 {digest.hexdigest()[:12]}"
-
-
-def header(platform=None, threads=None):
-    """The run's provenance, one line each: date, commit, machine, software, platform, load, command."""
-    lines = [f"date: {datetime.datetime.now().astimezone():%Y-%m-%d %H:%M %Z}",
-             f"commit: {commit()}",
-             f"machine: {machine()}",
-             f"software: OpenMM {openmm.version.full_version}, openmm-rigid {openmmrigid.__version__}, "
-             f"Python {pyplatform.python_version()}, numpy {np.__version__}",
-             f"plugin libraries: {pluginBuild()}"]
-    if platform is not None:
-        lines.append(f"platform: {platform}" + (f", {threads} thread(s)" if threads else ""))
-    lines += [f"load average before the run: {loadAverage()} (1, 5, 15 min)", f"command: `{command()}`"]
-    return lines
 
 
 def shown(path):
@@ -251,6 +191,15 @@ def blockMean(values, blocks=(5, 10)):
         errors.append(means.std(axis=0, ddof=1)/np.sqrt(count))
     error = np.max(errors, axis=0) if errors else np.full(values.shape[1:], np.nan)
     return values.mean(axis=0), error
+
+
+def overSeeds(estimates):
+    """(mean, standard error) over independent runs' (mean, error): the error from the spread of their means,
+    or with one run its own error."""
+    means = np.array([estimate[0] for estimate in estimates], dtype=float)
+    if len(means) == 1:
+        return float(means[0]), None if estimates[0][1] is None else float(estimates[0][1])
+    return float(means.mean()), float(means.std(ddof=1)/np.sqrt(len(means)))
 
 
 def molecularKineticEnergies(velocities, masses, molecules):
@@ -392,11 +341,6 @@ FORCE_EVALUATIONS = {openmmrigid.RigidBodyIntegrator.Verlet: 1, openmmrigid.Rigi
                      openmmrigid.RigidBodyIntegrator.Yoshida4: 3, openmmrigid.RigidBodyIntegrator.Omelyan4: 4}
 
 
-def forceEvaluations(integrator):
-    """Force evaluations per step of a RigidBodyIntegrator (or RigidBodyBussiIntegrator): those of its splitting."""
-    return FORCE_EVALUATIONS[integrator.getSplitting()]
-
-
 def accuracyWarnings(caught):
     """The messages of the openmmrigid.AccuracyWarning among warnings recorded with
     warnings.catch_warnings(record=True) (the accuracy check issues one, once, from within the step
@@ -529,38 +473,6 @@ class SampleStore:
     def release(self, key):
         with self._locked() as data:
             data["claims"].pop(key, None)
-
-    def note(self, key, value):
-        """Keep a value beside the samples (e.g. a timing), under `key` in the store's "notes"."""
-        with self._locked() as data:
-            data.setdefault("notes", {})[key] = value
-
-    def total(self):
-        """How many samples the store holds, over all jobs."""
-        return sum(len(job["samples"]) for job in self.read()["jobs"].values())
-
-    def addRun(self, record):
-        """Record what a run added (its provenance and counts) in the store's "runs"."""
-        with self._locked() as data:
-            data["runs"].append(record)
-
-    def recordRun(self, added, seconds, platform, threads, workers):
-        """addRun() for this run: date, commit, machine, platform, threads and workers, samples added,
-        wall seconds and the command."""
-        self.addRun(dict(date=f"{datetime.datetime.now().astimezone():%Y-%m-%d %H:%M %Z}", commit=commit(), machine=machine(),
-                         platform=platform, threads=threads, workers=workers, added=added, seconds=seconds, command=command()))
-
-    @staticmethod
-    def describeRun(run):
-        """One line of a run record (records of earlier runs may lack fields)."""
-        where = run.get("platform", "")
-        if run.get("threads"):
-            where += f", {run['threads']} thread(s)"
-        if run.get("workers", 1) > 1:
-            where += f" x {run['workers']} workers"
-        minutes = f" in {run['seconds']/60:.0f} min" if run.get("seconds") else ""
-        return f"{run['date']}, commit {run['commit']}, {where.strip(', ')}: {run['added']} added{minutes}, `{run['command']}`"
-
 
 def runWorkers(task, arguments, workers):
     """task(*arguments) in this process (workers 1), or in `workers` processes at once, each started
@@ -794,9 +706,9 @@ class Page:
         head = [f"# {study.title}", "", "{.claim}", study.claim.strip(), ""]
         if self.quick:
             head += ["(A `--quick` smoke run: not a measurement.)", ""]
-        head += ["The command that makes this page, its summary `benchmarks/data/"
-                 f"{study.name}.json` and its figures (`--report` redraws them from the summary alone):", "",
-                 "```bash", commandLine, "```", ""]
+        figures = " and its figures" if any(line.startswith("![") for line in self.lines) else ""
+        head += [f"The command that makes this page, its summary `benchmarks/data/{study.name}.json`{figures} "
+                 "(`--report` writes the page again from the summary alone):", "", "```bash", commandLine, "```", ""]
         if study.method:
             head += ["## Method", "", study.method, ""]
         tail = []

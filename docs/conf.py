@@ -41,7 +41,7 @@ extensions = [
 # there) and are pulled into it by {include} from the pages that show them, so they are not pages
 # of their own.
 source_suffix = {".md": "markdown", ".rst": "restructuredtext"}
-exclude_patterns = ["results", "figures", "ARCHITECTURE.md", "gpu.md", "free-rotor-notes.md", "_ext", "Doxyfile"]
+exclude_patterns = ["ARCHITECTURE.md", "gpu.md", "free-rotor-notes.md", "_ext", "Doxyfile"]
 root_doc = "index"
 
 myst_enable_extensions = ["dollarmath", "amsmath", "colon_fence", "deflist", "attrs_block"]
@@ -82,15 +82,13 @@ copybutton_prompt_text = r"\$ |>>> "
 copybutton_prompt_is_regexp = True
 
 
-# Links written for the repository (GitHub renders docs/results/*.md, docs/gpu.md, ...) point at the
-# files the site shows inside its own pages: send them there.
+# Links written for the repository (GitHub renders docs/gpu.md, ...) point at the files the site shows
+# inside its own pages: send them there.
 _PAGES_OF_INCLUDED = {"ARCHITECTURE": "developer/architecture", "gpu": "developer/gpu",
                       "free-rotor-notes": "theory/free-rotor-algorithm"}
 
 
 def _pageOf(target):
-    if target.startswith("results/"):
-        return "validation/" + target[len("results/"):]
     return _PAGES_OF_INCLUDED.get(target)
 
 
@@ -145,24 +143,8 @@ def _basesInPackage(app, name, obj, options, bases):
             bases[index] = f":py:class:`openmmrigid.{base.__name__}`"
 
 
-def _everyResultsDocumentShown(app):
-    """Each docs/results/<benchmark>.md has its page docs/validation/<benchmark>.md (a warning, so an error)."""
-    from sphinx.util import logging
-
-    shown = {page.stem for page in (docs / "validation").glob("*.md")}
-    for document in sorted((docs / "results").glob("*.md")):
-        if document.stem not in shown:
-            logging.getLogger(__name__).warning(
-                f"docs/results/{document.name} has no page: add docs/validation/{document.name} "
-                f"(its claim, its command, and an include of the document) and list it in docs/validation/index.md")
-
-
 def setup(app):
-    from pygments.lexers.special import TextLexer
 
-    # The results documents quote CSV files as ```csv blocks, a language Pygments does not have: plain text.
-    app.add_lexer("csv", TextLexer)
-    app.connect("builder-inited", _everyResultsDocumentShown)
     app.connect("doctree-read", _redirectLinksToIncludedFiles)
     app.connect("doctree-read", _resultsLayout)
     app.connect("autodoc-process-bases", _basesInPackage)

@@ -7,7 +7,7 @@ of the project's measurements, docs/guide/step-sizes.md) runs at constant temper
 - ``RigidBodyLangevinIntegrator`` with every moment of inertia raised to at least 0.04 amu nm^2
   (``setMinimumMomentOfInertia``) at its accurate step, 12 fs by default.
 
-Why these steps (docs/guide/raised-moments.md and docs/results/inertia_sampling.md: 500
+Why these steps (docs/guide/raised-moments.md and docs/validation/inertia_sampling.md: 500
 TIP4P-Ew waters, NVT, friction 1/ps, U per water against the step, bias tolerance 0.1 kJ/mol): stock
 is accurate to 5.3-6 fs (+0.13 kJ/mol at 6 fs in one reading, NaN at 8 fs), and the benchmarks time it
 at 5 fs; the rigid integrator with raised moments is accurate to 13.5-14 fs (unstable at 16 fs), and
@@ -309,13 +309,13 @@ def summarize(runs, rounds, discardRounds):
         defaultSteps = round(runs[0].dt*1000, 6) == 5 and round(runs[1].dt*1000, 6) == 12
         print(f"U per molecule, rigid - stock: {difference:+.3f} +- {error:.3f} kJ/mol ({sigmas:.1f} standard errors: "
               + ("the same within the errors)" if sigmas < 2 else "more than these errors; see the legend)")
-              + ("; docs/results/inertia_sampling.md's longer runs put it near -0.2" if defaultSteps else ""))
+              + ("; docs/validation/inertia_sampling.md's longer runs put it near -0.2" if defaultSteps else ""))
     print("\nns/day: simulated time per day of the step() calls alone, over the measured part; ms/step: the same per\n"
           "  step; the two runs advance in turn, so both see the same load (other work on the cores adds noise).\n"
           "U per molecule: the mean potential energy per water +- its standard error (from the samples'\n"
           "  autocorrelation; U wanders on a scale of several ps, so a run of 30 ps resolves about 0.1 to 0.2\n"
           "  kJ/mol and its error bar can understate that). A configurational average: raised moments keep it, so\n"
-          "  the two differ only by each integrator's small bias at its step; docs/results/inertia_sampling.md's runs (500 waters, two\n"
+          "  the two differ only by each integrator's small bias at its step; docs/validation/inertia_sampling.md's runs (500 waters, two\n"
           "  starts of 20 ps, against 2 fs) read stock at 4 to 6 fs +0.07 to +0.08 and raised moments at 12 fs\n"
           "  -0.11 +- 0.05 kJ/mol: a difference near -0.2 kJ/mol, 0.4 % of U.\n"
           "T: the kinetic temperature (translational and rotational degrees of freedom together); T trans: that\n"

@@ -7,7 +7,7 @@ energy: the drift (slope of a linear fit, per degree of freedom) and the fluctua
 deviation about the fit), and what a step costs.
 
 Step: 2 fs by default, the step most production water simulations use, where both integrators are
-well inside their accurate range (docs/results/energy_drift.md, TIP4P-Ew: up to 6 fs both drift
+well inside their accurate range (docs/validation/energy_drift.md, TIP4P-Ew: up to 6 fs both drift
 within +-0.1 kJ/mol/ns/dof and fluctuate alike, the fluctuation at 1 to 2 fs mostly the PME cutoff's
 floor and growing as the step squared beyond it; at 7 fs both drift, at 8 fs both blow up). So this
 compares the two at an equal, ordinary step, where the rigid integrator is no more accurate than
@@ -145,10 +145,10 @@ def main():
     print("\ndrift: slope of a linear fit of the total energy over the run, per degree of freedom (0 for an ideal\n"
           "  integrator; short runs scatter about it, in either sign);\n"
           "fluctuation: standard deviation of the total energy about that fit (smaller is more accurate; at 1 to\n"
-          "  2 fs most of it comes from the PME cutoff, not from the integrator: see docs/results/energy_drift.md);\n"
+          "  2 fs most of it comes from the PME cutoff, not from the integrator: see docs/validation/energy_drift.md);\n"
           "ms/step: wall time of the step() calls alone; cost / stock: median over the rounds of the integrator's\n"
           "  time over stock's in the same round. Other work on the same cores still adds noise: the step-cost results\n"
-          "  figures come from benchmarks/step_cost.py (longer blocks, medians of repetitions).")
+          "  figures come from python benchmarks/run.py step_cost (longer blocks, medians of repetitions).")
     print(f"total {time.perf_counter() - started:.0f} s")
 
 

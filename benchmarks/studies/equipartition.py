@@ -5,8 +5,8 @@ import numpy as np
 import openmm
 import openmm.unit as unit
 
-import systems
-from harness import Study, Unstable, blockMean, pyplot
+import setups
+from harness import Study, Unstable, blockMean, overSeeds, pyplot
 
 NVE = ("stock-vv", "rigid-verlet", "rigid-verlet@0.04")
 HELD_HALF_STEP = ("stock-middle", "rigid-langevin", "rigid-langevin@0.04")   # velocities half a step off the positions
@@ -28,15 +28,15 @@ QUICK = {"system": ["spce"], "integrator": ["stock-vv", "stock-middle", "rigid-l
 
 def measure(job, env):
     """One run: fresh velocities at 300 K, DISCARD_PS, then every EVERY_PS the waters' T_trans and T_rot
-    (systems.waterTemperatures, the integrator's moments) and U per water for PRODUCTION_PS."""
+    (setups.waterTemperatures, the integrator's moments) and U per water for PRODUCTION_PS."""
     quick = env.quick
-    built = systems.water(job["system"], 216 if quick else MOLECULES)
-    state = systems.start(f"equipartition-{job['system']}-{len(built.waters)}", built, env.platform, env.properties)
+    built = setups.water(job["system"], 216 if quick else MOLECULES)
+    state = setups.start(f"equipartition-{job['system']}-{len(built.waters)}", built, env.platform, env.properties)
     name, _, floor = job["integrator"].partition("@")
     floor = float(floor or 0)
-    integrator = systems.makeIntegrator(name, job["step"], job["seed"], floor=floor)
-    context = systems.context(built, integrator, state, env.platform, env.properties, job["seed"])
-    context.setVelocitiesToTemperature(systems.TEMPERATURE*unit.kelvin, job["seed"] + 1)
+    integrator = setups.makeIntegrator(name, job["step"], job["seed"], floor=floor)
+    context = setups.context(built, integrator, state, env.platform, env.properties, job["seed"])
+    context.setVelocitiesToTemperature(setups.TEMPERATURE*unit.kelvin, job["seed"] + 1)
     context.applyVelocityConstraints(1e-8)
     dt = job["step"]/1000
     every = max(1, int(round(EVERY_PS/dt)))
@@ -47,11 +47,11 @@ def measure(job, env):
         for _ in range(int(round(production/(every*dt)))):
             integrator.step(every)
             now = context.getState(getPositions=True, getVelocities=True, getEnergy=True)
-            u = now.getPotentialEnergy().value_in_unit(systems.KJ)/len(built.waters)
+            u = now.getPotentialEnergy().value_in_unit(setups.KJ)/len(built.waters)
             if not np.isfinite(u) or u > 0:
                 raise Unstable(f"U = {u:.3g} kJ/mol per water")
             box = now.getPeriodicBoxVectors(asNumpy=True).value_in_unit(unit.nanometer)
-            trans, rot = systems.waterTemperatures(now.getPositions(asNumpy=True).value_in_unit(unit.nanometer),
+            trans, rot = setups.waterTemperatures(now.getPositions(asNumpy=True).value_in_unit(unit.nanometer),
                                                    now.getVelocities(asNumpy=True).value_in_unit(unit.nanometer/unit.picosecond),
                                                    built, floor, box)
             samples["trans"].append(trans)
@@ -59,7 +59,7 @@ def measure(job, env):
             samples["U"].append(u)
             if hasattr(integrator, "getOnStepKineticEnergy"):   # BAOAB's on-step kinetic energy, whole system
                 dof = 6*len(built.waters) - 3
-                samples["onStep"].append(2*integrator.getOnStepKineticEnergy().value_in_unit(systems.KJ)/(dof*systems.BOLTZMANN))
+                samples["onStep"].append(2*integrator.getOnStepKineticEnergy().value_in_unit(setups.KJ)/(dof*setups.BOLTZMANN))
     except openmm.OpenMMException as error:
         raise Unstable(str(error).splitlines()[0][:160])
     result = {}
@@ -68,19 +68,14 @@ def measure(job, env):
             result[key], result[key + "Error"] = (float(v) for v in blockMean(values))
     result["diff"], result["diffError"] = (float(v) for v in blockMean(np.subtract(samples["rot"], samples["trans"])))
     # Canonical fluctuation of U: the configurational heat capacity per water, Var(U_total) / (k T^2 N).
-    result["heatCapacity"] = float(np.var(samples["U"])*len(built.waters)/(systems.BOLTZMANN*systems.TEMPERATURE**2))
+    result["heatCapacity"] = float(np.var(samples["U"])*len(built.waters)/(setups.BOLTZMANN*setups.TEMPERATURE**2))
     return result
 
 
 def pooled(samples, key):
-    """Mean over independent starts and its standard error: from their spread with two or more, else the
-    one run's block error."""
-    values = [sample[key] for sample in samples if sample.get(key) is not None]
-    if not values:
-        return None, None
-    if len(values) == 1:
-        return values[0], samples[0].get(key + "Error")
-    return float(np.mean(values)), float(np.std(values, ddof=1)/np.sqrt(len(values)))
+    """Mean over independent starts and its standard error (harness.overSeeds)."""
+    estimates = [(sample[key], sample.get(key + "Error")) for sample in samples if sample.get(key) is not None]
+    return overSeeds(estimates) if estimates else (None, None)
 
 
 def summarize(results, env):
@@ -98,7 +93,7 @@ def summarize(results, env):
         if reference and row["U"] is not None:
             uRef, uRefError = pooled(reference["samples"], "U")
             capacity = float(np.mean([s["heatCapacity"] for s in reference["samples"]]))
-            row["conf"] = systems.TEMPERATURE + (row["U"] - uRef)/capacity
+            row["conf"] = setups.TEMPERATURE + (row["U"] - uRef)/capacity
             row["confError"] = float(np.hypot(row["UError"] or 0, uRefError or 0)/capacity)
         rows.append(row)
     return rows
@@ -132,7 +127,7 @@ def report(rows, page):
             points = sorted((row["step"], row["diff"], row["diffError"] or 0) for row in spce if row["integrator"] == name)
             if points:
                 x, y, e = zip(*points)
-                ax.errorbar(x, y, yerr=e, marker="o", capsize=3, label=systems.INTEGRATORS.get(name.split("@")[0], name)
+                ax.errorbar(x, y, yerr=e, marker="o", capsize=3, label=setups.INTEGRATORS.get(name.split("@")[0], name)
                             + (f", moments raised to {name.split('@')[1]}" if "@" in name else ""))
         ax.axhline(0, color="grey", lw=0.8)
         ax.set(title=f"SPC/E, {title}", xlabel="step (fs)")

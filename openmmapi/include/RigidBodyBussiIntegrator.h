@@ -19,7 +19,7 @@ namespace OpenMMRigid {
  * The velocities it rescales, and reports, are on-step: the temperature of their total kinetic energy
  * reads the bath's at any step size, by construction. How that energy divides between translation and
  * rotation is the dynamics': for rigid water at 6 to 8 fs the on-step rotation reads cold and the
- * translation as much warm (docs/results/thermostat_temperature.md gives the measurements).
+ * translation as much warm (docs/validation/thermostats.md gives the measurements).
  */
 class OPENMM_EXPORT_RIGID RigidBodyBussiIntegrator : public RigidBodyIntegrator {
 public:

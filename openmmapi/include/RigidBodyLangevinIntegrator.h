@@ -54,7 +54,7 @@ namespace OpenMMRigid {
  * axis of least moment reads about 7 % hot, the translation 1 to 2 % cold, and the reported
  * temperature 1 to 2 % hot (LangevinMiddleIntegrator + SETTLE: the same libration, 3 % hot in all),
  * while the configurational averages stay those of the small steps (docs/guide/thermostats.md and
- * docs/results/thermostat_temperature.md give the measurements). Velocities one sets are
+ * docs/validation/thermostats.md give the measurements). Velocities one sets are
  * taken as such half-step velocities (setVelocitiesToTemperature() shifts them by half a kick, as for
  * LangevinMiddleIntegrator).
  *
@@ -154,7 +154,7 @@ public:
      * of the same trajectory with on-step velocities at both ends: BAOAB's, whose ends are free of
      * the terms of first order in the step (dt F.v / 2 per degree of freedom) that W's half-step ends
      * carry. That is what the near-equilibrium estimate of the configuration-space error needs
-     * (benchmarks/sampling_error.py). The state is left as it is. Only available once the integrator
+     * (benchmarks/studies/sampling_error.py). The state is left as it is. Only available once the integrator
      * is bound to a Context.
      *
      * @return the kinetic energy, measured in kJ/mol

@@ -25,7 +25,7 @@ import openmm.unit as unit
 
 import openmmrigid
 # The systems and measurements that the stress scenarios build on live in rigidtesting (shared with
-# benchmarks/stress.py); the tests use them from there.
+# benchmarks/studies/stress.py); the tests use them from there.
 import rigidtesting
 from rigidtesting import randomRotation  # noqa: F401
 from rigidtesting.stress import (BOLTZMANN, KJ_PER_MOL_PER_NM, WATER_MODELS, Cluster, RigidMotion,  # noqa: F401

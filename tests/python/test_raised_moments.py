@@ -18,7 +18,7 @@ counterpart of hydrogen mass repartitioning:
   = coth(x) - 1/x with and without raised moments, and a water box reads the bath temperature in
   translation and rotation with them;
 - every mass and the minimum moment times 4, at twice the step and half the friction, is the same
-  run bit for bit on Reference with velocities halved (the scaling benchmarks/step_cap.py reads its
+  run bit for bit on Reference with velocities halved (the scaling benchmarks/studies/step_cap.py reads its
   doubled-mass runs by);
 - energy is conserved without a thermostat, and bad values are refused with the class named.
 """

@@ -1,5 +1,5 @@
 """The near-equilibrium estimator of the configuration-space KL divergence
-(rigidtesting.samplingerror.configurationKL, which benchmarks/sampling_error.py uses) on a
+(rigidtesting.samplingerror.configurationKL, which benchmarks/studies/sampling_error.py uses) on a
 1-D harmonic oscillator, where each Langevin splitting's sampled distribution is a known Gaussian
 (the stationary covariance of its linear step): OBABO's configurations are too wide by
 1/(1 - (omega dt)^2/4), BAOAB's exact. The estimate agrees with the exact divergence within 4 of its

@@ -1,4 +1,4 @@
-"""Stability stress tests of RigidBodyIntegrator: the fast subset of benchmarks/stress.py, on small
+"""Stability stress tests of RigidBodyIntegrator: the fast subset of benchmarks/studies/stress.py, on small
 versions of its scenarios (built in rigidtesting.stress). Every run is checked for
 
 - finiteness: no NaN or infinity in positions, velocities or energy, and no exception;
@@ -157,7 +157,7 @@ def test_hot_water_momentum_is_impulse_of_net_force(hot_water):
 
 
 def test_water_at_large_step():
-    """TIP3P at 300 K with 7 fs steps, the largest with which benchmarks/stress.py finds 500 waters
+    """TIP3P at 300 K with 7 fs steps, the largest with which benchmarks/studies/stress.py finds 500 waters
     within 5 % of their kinetic energy over 20 ps (8 fs passes its 1 ps scan and then heats by 10 %):
     finite, rigid, within that 5 % over 0.5 ps."""
     scenario = stress.water("tip3p", size=1.5)

@@ -22,11 +22,11 @@ rigidtesting.bodies
 rigidtesting.samplingerror
     The near-equilibrium estimate of the configuration-space KL divergence from shadow work
     (``configurationKL``), and a 1-D harmonic oscillator whose exact value is known, shared by
-    benchmarks/sampling_error.py and the test suite.
+    benchmarks/studies/sampling_error.py and the test suite.
 
 rigidtesting.stress
     The stability stress scenarios (extreme body shapes in a hot bath, a fast spinning body, hot
-    clusters and water) and their measurements, shared by benchmarks/stress.py and the test suite.
+    clusters and water) and their measurements, shared by benchmarks/studies/stress.py and the test suite.
 """
 
 import io

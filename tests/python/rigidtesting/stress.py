@@ -1,5 +1,5 @@
 """Scenarios and measurements for the stability stress tests of RigidBodyIntegrator: the fast subset
-in tests/python/test_stress.py and the long runs of benchmarks/stress.py.
+in tests/python/test_stress.py and the long runs of benchmarks/studies/stress.py.
 
 Scenarios (each a Scenario: a System with the state to start it from):
 

@@ -11,7 +11,7 @@
  * phi = (L_k/I_k) dt, and L_lab = A^T L_body stays fixed.
  *
  * Exact up to rounding for the splitting it implements; its error against the true free motion is
- * O(dt^3) per step (benchmarks/rotation_accuracy.py measures it against FreeRotor).
+ * O(dt^3) per step (benchmarks/studies/rotation_accuracy.py measures it against FreeRotor).
  * See numerics/RigidCore.h for the rules every core file follows.
  */
 #ifndef OPENMMRIGID_CORE_NOSQUISH_H_
