@@ -98,8 +98,6 @@ def pyplot():
     return plt
 
 
-
-
 # --- Statistics, kinetic energies, the rigid integrators and their timing -----------------------------
 def blockMean(values, blocks=(5, 10)):
     """Mean of a time series (first axis) and its standard error by block averaging (Flyvbjerg and Petersen,
@@ -199,7 +197,8 @@ def nsPerDay(stepFs, secondsPerStep):
 
 
 def blockSteps(integrator, fixed, target, minimum):
-    """Steps per timed block: `fixed`, else enough for `target` seconds (at least `minimum`) by a rough timing."""
+    """Steps per timed block: `fixed` if given, else enough for `target` seconds (at least `minimum`), timed
+    after two untimed steps on blocks of 1, 4, 16, ... steps until one takes a tenth of the target."""
     if fixed:
         return fixed
     integrator.step(2)
@@ -243,7 +242,7 @@ class SampleStore:
     """Numbered samples (an index names a seed: none is computed twice) of jobs (string keys), kept between
     runs, that workers add to at once: `folder`/store.json, read and written whole under a lock (fcntl). A
     failed job takes no more samples, nor do the jobs it blocks. A worker claims the job with the fewest
-    samples, so an interrupted run leaves an even table. `setup` (what makes samples comparable) is fixed."""
+    samples, so an interrupted run leaves an even table. `setup` (what makes samples comparable) must match."""
 
     def __init__(self, folder, setup=None):
         self.folder = Path(folder)
