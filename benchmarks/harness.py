@@ -262,11 +262,11 @@ class SampleStore:
         with open(self.lockPath, "a") as lock:   # closing it, even on an exception, releases the lock
             fcntl.flock(lock, fcntl.LOCK_EX)
             empty = {"setup": None, "jobs": {}, "claims": {}, "runs": []}
-            data = json.loads(self.path.read_text()) if self.path.exists() else empty
+            data = json.loads(self.path.read_text(encoding="utf-8")) if self.path.exists() else empty
             yield data
             if write:   # replaced atomically
                 temporary = self.path.with_suffix(f".{os.getpid()}.tmp")
-                temporary.write_text(json.dumps(data, indent=1))
+                temporary.write_text(json.dumps(data, indent=1), encoding="utf-8")
                 os.replace(temporary, self.path)
 
     @staticmethod
@@ -477,7 +477,7 @@ def measureStudy(study, args, argv):
     started = time.perf_counter()
     if _log is not None:
         _log.close()
-    _log = open(env.folder/"log.txt", "w")
+    _log = open(env.folder/"log.txt", "w", encoding="utf-8")
     stamp(f"{study.name}: {'quick ' if args.quick else ''}run on {args.platform}")
     if study.run is not None:
         summary = study.run(env)
@@ -497,8 +497,10 @@ def measureStudy(study, args, argv):
     data = jsonReady({"study": study.name, "runs": [run], "summary": summary})
     path = dataPath(study, args.quick)
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(data, indent=1) + "\n")
+    path.write_text(json.dumps(data, indent=1) + "\n", encoding="utf-8")
     say(f"wrote {shown(path)}")
+    _log.close()
+    _log = None
     return data
 
 
@@ -570,7 +572,7 @@ class Page:
             tail.append("- " + ", ".join(f"{key}: `{value}`" if key == "command" else f"{key}: {value}"
                                          for key, value in run.items() if value not in (None, "")))
         self.path.parent.mkdir(parents=True, exist_ok=True)
-        self.path.write_text("\n".join(head + self.lines + tail).rstrip() + "\n")
+        self.path.write_text("\n".join(head + self.lines + tail).rstrip() + "\n", encoding="utf-8")
         say(f"wrote {shown(self.path)}")
 
 
@@ -580,7 +582,7 @@ def reportStudy(study, quick, data=None):
         path = dataPath(study, quick)
         if not path.exists():
             raise SystemExit(f"{study.name}: no summary at {shown(path)}; run the study first")
-        data = json.loads(path.read_text())
+        data = json.loads(path.read_text(encoding="utf-8"))
     page = Page(study, data, quick)
     study.report(data["summary"], page)
     page.write(data)
@@ -622,6 +624,9 @@ def parseArguments(studies, argv):
 def main(argv=None):
     """Run the studies named on the command line (all: every one), or write their pages again."""
     argv = sys.argv[1:] if argv is None else argv
+    for stream in (sys.stdout, sys.stderr):   # pages and logs hold non-ASCII text; a C locale would refuse it
+        with contextlib.suppress(AttributeError, ValueError):
+            stream.reconfigure(encoding="utf-8")
     names = studyNames()
     words = [word for word in argv if not word.startswith("-")]
     chosen = names if "all" in words else [word for word in words if (STUDIES/f"{word}.py").exists()]

@@ -85,10 +85,10 @@ def sample(name, config, step, seed, env, time=20.0, discard=2.0, every=0.1, kin
             series["T"].append(2*K/(dof*kB))
             if kinetic:
                 v = state.getVelocities(asNumpy=True).value_in_unit(unit.nanometer/unit.picosecond)
-                translational, axes = harness.principalKineticEnergies(x, v, masses, water)
+                translational, perAxis = harness.principalKineticEnergies(x, v, masses, water)
                 series["Ttrans"].append(2*translational/((3*n - 3)*kB))
                 series["Trot"].append(2*(K - translational)/(3*n*kB))
-                series["Taxes"].append(2*axes/(n*kB))
+                series["Taxes"].append(2*perAxis/(n*kB))
             oxygens.append(x[water[:, 0]])
             axes.append((u := x[water[:, 1:]].mean(axis=1) - oxygens[-1])/np.linalg.norm(u, axis=1)[:, None])   # dipole axes
     except openmm.OpenMMException as error:

@@ -14,8 +14,13 @@ CONFIGURATIONS = {   # name: (label, model, steps (fs), system variant, integrat
     "recipe": ("stock recipe (H angles, heavy water H, bonded 2 fs)", "H angles", [6, 8, 10], "hangles", "recipe"),
     "xh": ("rigid X-H groups", "rigid X-H", [2, 4, 5, 6], "plain", "rigid"),
     "xh-mts": ("rigid X-H groups + bonded 2 fs", "rigid X-H", [6, 8, 10, 12], "plain", "rigid-mts"),
-    "mts": ("bonded 2 fs, X-H bonds constrained", "flexible", [4, 6, 8], "plain", "mts")}
+    "mts": ("bonded 2 fs, X-H bonds constrained", "flexible", [4, 6, 8], "plain", "mts"),
+    # protein_step_cap's variants of xh-mts at one step, not in this study's grid
+    "xh-mts-1fs": ("the same, bonded 1 fs", "rigid X-H", [12], "plain", "rigid-mts"),
+    "xh-mts-0.32": ("the same, moments raised to 0.32", "rigid X-H", [12], "plain", "rigid-mts"),
+    "xh-mts-f5": ("the same, friction 5/ps", "rigid X-H", [12], "plain", "rigid-mts")}
 REFERENCE = {"flexible": ("stock", 2), "H angles": ("hangles", 2), "rigid X-H": ("xh", 2)}
+OVERRIDES = {"xh-mts-1fs": dict(substep=1.0), "xh-mts-0.32": dict(floor=0.32), "xh-mts-f5": dict(friction=5.0)}   # of FLOOR, SUBSTEP, FRICTION
 FULL = dict(equilibrate_ps=1.0, sampled_ps=4.0, every_ps=0.1, timed_s=2.0, repetitions=5)
 QUICK = dict(equilibrate_ps=0.02, sampled_ps=0.1, every_ps=0.01, timed_s=0.0, repetitions=2)
 STARTS = {"villin": ("villin-tip3p-0.9nm", 5.0), "dipeptide": ("quick-dipeptide-tip3p-216", 0.2)}   # setups.start: name, ps
@@ -57,9 +62,11 @@ def prepared(job, env):
     built, step, seed, (name, picoseconds) = build(job["system"], variant), job["step"], job["seed"], STARTS[job["system"]]
     state = setups.start(name, build(job["system"], "plain"), env.platform, env.properties, picoseconds)
     bodies = openmmrigid.rigidHydrogenGroups(built.topology, built.system) if kind.startswith("rigid") else None
-    integrator = stockRecipe(step, max(2, round(step/SUBSTEP))) if kind == "recipe" else setups.makeIntegrator(
-        "stock-middle" if kind == "stock" else "rigid-langevin", step, seed, floor=FLOOR, bodies=bodies)
-    if kind.endswith("mts"): integrator.setForceGroupSubsteps([(0, 1), (1, max(1, round(step/SUBSTEP)))])
+    floor, substep, friction = (OVERRIDES.get(job["configuration"], {}).get(key, default)
+                                for key, default in (("floor", FLOOR), ("substep", SUBSTEP), ("friction", FRICTION)))
+    integrator = stockRecipe(step, max(2, round(step/substep))) if kind == "recipe" else setups.makeIntegrator(
+        "stock-middle" if kind == "stock" else "rigid-langevin", step, seed, floor=floor, bodies=bodies, friction=friction)
+    if kind.endswith("mts"): integrator.setForceGroupSubsteps([(0, 1), (1, max(1, round(step/substep)))])
     integrator.setConstraintTolerance(1e-5)   # OpenMM's default, what users run
     integrator.setRandomNumberSeed(seed + 1)
     context = setups.context(built, integrator, state, env.platform, env.properties, seed)
@@ -83,9 +90,9 @@ def measure(job, env):
     if not np.all(np.isfinite(samples)): raise Unstable(f"non-finite energy within {len(samples)*settings['every_ps']:g} ps")
     return {name: [float(v) for v in blockMean(column)] for name, column in zip(("U", "T", "bonded"), np.array(samples).T)}
 
-def summarize(results, env):
-    """Rows: U, T, the solute's bonded U ([mean, error]), their biases against the model's reference (U, bonded), ns/day."""
-    settings, rows = QUICK if env.quick else FULL, []
+def biasRows(results):
+    """Rows: U, T, the solute's bonded U ([mean, error]) over the seeds, and their biases against the model's reference."""
+    rows = []
     for result in results:
         job, ok = result["job"], result["samples"] and not result["failed"]
         rows.append(dict(job, against="{} model, {} fs".format(model := CONFIGURATIONS[job["configuration"]][1], REFERENCE[model][1]),
@@ -96,6 +103,11 @@ def summarize(results, env):
         ref = ran.get((row["system"], *REFERENCE[CONFIGURATIONS[row["configuration"]][1]]))
         for k in ("U", "bonded") if ref else ():
             row[f"{k}_bias"], row[f"{k}_bias_error"] = row[k][0] - ref[k][0], float(np.hypot(row[k][1], ref[k][1]))
+    return rows, ran
+
+def summarize(results, env):
+    """biasRows(), and every configuration that ran timed side by side (ns/day)."""
+    settings, (rows, ran) = QUICK if env.quick else FULL, biasRows(results)
     for system in dict.fromkeys(row["system"] for row in rows):   # speed: one process, blocks interleaved
         kept = {key: prepared(dict(row, seed=0), env) for key, row in ran.items() if key[0] == system}   # contexts kept alive
         steps = 5 if env.quick else min(blockSteps(made[1], None, settings["timed_s"], 10) for made in kept.values())
@@ -158,6 +170,8 @@ itself at 2 fs. A run: the equilibrated start, new velocities, 1 ps discarded, U
     caveats="""U is resolved to 100-200 kJ/mol: "accurate" means no bias seen at this resolution, as for stock HMR at 4 fs. T is not ruled on:
 the recipe's on-step velocities read low by design (BAOAB's on-step kinetic temperature of a harmonic mode is T (1 - (omega dt/2)^2), its
 positions exact). One small protein, CPU only: GPUs, larger systems and slow observables are not measured.""",
-    grid=[{"system": ["villin"], "configuration": [name], "step": c[2], "seed": [0, 1, 2]} for name, c in CONFIGURATIONS.items()],
-    quick=[{"system": ["dipeptide"], "configuration": [name], "step": c[2][:1], "seed": [0]} for name, c in CONFIGURATIONS.items()],
+    grid=[{"system": ["villin"], "configuration": [name], "step": c[2], "seed": [0, 1, 2]} for name, c in CONFIGURATIONS.items()
+          if name not in OVERRIDES],
+    quick=[{"system": ["dipeptide"], "configuration": [name], "step": c[2][:1], "seed": [0]} for name, c in CONFIGURATIONS.items()
+           if name not in OVERRIDES],
     measure=measure, summarize=summarize)

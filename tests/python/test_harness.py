@@ -25,7 +25,7 @@ def headerConstant(text, name):
 
 def test_check_window_is_the_integrators():
     """The accuracy check's window that the accuracy_check study sizes its runs by is the check's own."""
-    text = (ROOT/"openmmapi"/"include"/"internal"/"AccuracyCheck.h").read_text()
+    text = (ROOT/"openmmapi"/"include"/"internal"/"AccuracyCheck.h").read_text(encoding="utf-8")
     assert harness.CHECK_WINDOW_PS == headerConstant(text, "WindowTime")
 
 
@@ -66,13 +66,13 @@ def test_sample_store_failure_blocks_and_claims_lapse(tmp_path):
     assert store.claim(keys, 2, blockers) == ("2 fs", [0, 1])
     assert store.claim(keys, 2, blockers) is None
     ended = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
-    data = json.loads((tmp_path/"store.json").read_text())
+    data = json.loads((tmp_path/"store.json").read_text(encoding="utf-8"))
     data["claims"]["2 fs"] = {"host": socket.gethostname(), "pid": int(ended.stdout), "since": 0.0}
-    (tmp_path/"store.json").write_text(json.dumps(data))
+    (tmp_path/"store.json").write_text(json.dumps(data), encoding="utf-8")
     assert store.claim(keys, 2, blockers) == ("2 fs", [0, 1])
-    data = json.loads((tmp_path/"store.json").read_text())
+    data = json.loads((tmp_path/"store.json").read_text(encoding="utf-8"))
     data["claims"]["2 fs"] = {"host": socket.gethostname() + "-elsewhere", "pid": os.getpid(), "since": 0.0}
-    (tmp_path/"store.json").write_text(json.dumps(data))
+    (tmp_path/"store.json").write_text(json.dumps(data), encoding="utf-8")
     assert store.claim(keys, 2, blockers) == ("2 fs", [0, 1])
 
 
@@ -192,10 +192,10 @@ def test_study_runs_resumes_and_reports_from_its_summary(sandbox, monkeypatch):
     rows = {row["step"]: row for row in data["summary"]}
     assert rows[1]["mean"] == 2.0 and rows[2]["mean"] == 4.0 and rows[3]["mean"] == 3.0
     assert rows[3]["failed"] == "flung" and rows[4]["blocked"] and rows[4]["mean"] is None
-    stored = json.loads((sandbox/"data"/"toy.json").read_text())
+    stored = json.loads((sandbox/"data"/"toy.json").read_text(encoding="utf-8"))
     assert stored["summary"] == data["summary"] and stored["runs"][0]["command"].endswith("toy")
     page = harness.reportStudy(study, quick=False, data=data)
-    text = page.read_text()
+    text = page.read_text(encoding="utf-8")
     assert text.startswith("# A toy study\n") and "The mean is twice the step." in text
     assert "| 3 | 3.0 | flung |" in text and "| 4 |  | blocked |" in text
     assert "![The mean against the step](figures/toy_mean.png)" in text and (sandbox/"pages"/"figures"/"toy_mean.png").exists()
@@ -204,7 +204,7 @@ def test_study_runs_resumes_and_reports_from_its_summary(sandbox, monkeypatch):
     harness.measureStudy(study, args, argv)
     assert calls == []
     page.unlink()
-    assert harness.reportStudy(study, quick=False).read_text() == text
+    assert harness.reportStudy(study, quick=False).read_text(encoding="utf-8") == text
 
 
 def test_committed_pages_are_what_their_summaries_give(sandbox):
@@ -214,6 +214,6 @@ def test_committed_pages_are_what_their_summaries_give(sandbox):
     assert names, "no studies found"
     for name in names:
         study = harness.loadStudy(name)
-        data = json.loads((ROOT/"benchmarks"/"data"/f"{name}.json").read_text())
+        data = json.loads((ROOT/"benchmarks"/"data"/f"{name}.json").read_text(encoding="utf-8"))
         written = harness.reportStudy(study, quick=False, data=data)
-        assert written.read_text() == (ROOT/"docs"/"validation"/f"{name}.md").read_text(), name
+        assert written.read_text(encoding="utf-8") == (ROOT/"docs"/"validation"/f"{name}.md").read_text(encoding="utf-8"), name
