@@ -300,8 +300,10 @@ class SampleStore:
         return any(data["jobs"].get(other, {}).get("failed") is not None for other in blockers)
 
     def claim(self, keys, target, blockers=lambda key: ()):
-        """Claim, of `keys`, the job with the fewest samples below `target`, neither failed, blocked (blockers(key):
-        the keys whose failure stops it) nor claimed by a live worker: (key, its missing indices) or None."""
+        """Claim, of `keys`, the job with the fewest samples below its target (`target`: one for all, or {key:
+        target}), neither failed, blocked (blockers(key): the keys whose failure stops it) nor claimed by a live
+        worker: (key, its missing indices below its target) or None."""
+        targets = target if isinstance(target, dict) else dict.fromkeys(keys, target)
         now = time.time()
         with self._locked() as data:
             claims = data["claims"] = {key: claim for key, claim in data["claims"].items() if self._live(claim)}
@@ -309,13 +311,13 @@ class SampleStore:
             for key in keys:
                 job = data["jobs"].get(key, {"samples": {}, "failed": None})
                 if key not in claims and job["failed"] is None and not self.blocked(data, key, blockers(key)):
-                    counts[key] = sum(1 for index in job["samples"] if int(index) < target)
-            key = min((key for key in counts if counts[key] < target), key=counts.get, default=None)
+                    counts[key] = sum(1 for index in job["samples"] if int(index) < targets[key])
+            key = min((key for key in counts if counts[key] < targets[key]), key=counts.get, default=None)
             if key is None:
                 return None
             claims[key] = {"host": socket.gethostname(), "pid": os.getpid(), "since": now}
             have = self._job(data, key)["samples"]
-            return key, [index for index in range(target) if str(index) not in have]
+            return key, [index for index in range(targets[key]) if str(index) not in have]
 
     def add(self, key, index, values, **flags):
         """Record a sample (numbers, or a dict as JSON gives it back); flags (booleans) are or-ed into the job's."""
@@ -412,16 +414,15 @@ def _worker(name, args):
     blockers = _blockers(jobs)
     byKey = {jobKey(job): (job, seeds) for job, seeds in jobs}
     store = SampleStore(env.folder/"store")
+    targets = {key: len(seeds) for key, (job, seeds) in byKey.items()}
     while True:
-        # A claim for the largest number of seeds: a job with fewer is skipped once it has them all.
-        pending = [key for key, (job, seeds) in byKey.items() if len(store.samples(key)) < len(seeds)]
-        claim = pending and store.claim(pending, max(len(byKey[key][1]) for key in pending), blockers.get)
+        claim = store.claim(list(byKey), targets, blockers.get)
         if not claim:
             return
         key, missing = claim
         job, seeds = byKey[key]
         try:
-            for index in [index for index in missing if index < len(seeds)]:
+            for index in missing:
                 stamp(f"{study.name}: {key} seed={seeds[index]}")
                 try:
                     sample = study.measure(dict(job, seed=seeds[index]), env)

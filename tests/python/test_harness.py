@@ -217,3 +217,16 @@ def test_committed_pages_are_what_their_summaries_give(sandbox):
         data = json.loads((ROOT/"benchmarks"/"data"/f"{name}.json").read_text(encoding="utf-8"))
         written = harness.reportStudy(study, quick=False, data=data)
         assert written.read_text(encoding="utf-8") == (ROOT/"docs"/"validation"/f"{name}.md").read_text(encoding="utf-8"), name
+
+
+def test_sample_store_claims_each_job_to_its_own_target(tmp_path):
+    """With a target per job, a job is claimed for its own missing indices only, and one that has its own
+    number of samples is not claimed again, whatever the others' targets."""
+    store = harness.SampleStore(tmp_path, {})
+    store.add("few", 0, [1.0])
+    assert store.claim(["few", "many"], {"few": 1, "many": 3}) == ("many", [0, 1, 2])
+    assert store.claim(["few", "many"], {"few": 1, "many": 3}) is None      # few is complete, many is claimed
+    store.release("many")
+    for index in range(3):
+        store.add("many", index, [2.0])
+    assert store.claim(["few", "many"], {"few": 2, "many": 3}) == ("few", [1])
