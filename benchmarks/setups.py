@@ -205,14 +205,3 @@ def waterTemperatures(positions, velocities, built, minimumMoment=0.0, box=None)
     n = len(built.waters)
     removed = 3 if any(isinstance(force, openmm.CMMotionRemover) for force in built.system.getForces()) else 0
     return 2*translational/((3*n - removed)*BOLTZMANN), 2*rotational/(3*n*BOLTZMANN)
-
-
-def stockDegreesOfFreedom(system):
-    """The degrees of freedom app.StateDataReporter counts for a stock integrator."""
-    dof = 3*sum(1 for i in range(system.getNumParticles()) if system.getParticleMass(i) > 0*unit.dalton)
-    dof -= sum(1 for i in range(system.getNumConstraints())
-               if system.getParticleMass(system.getConstraintParameters(i)[0]) > 0*unit.dalton
-               or system.getParticleMass(system.getConstraintParameters(i)[1]) > 0*unit.dalton)
-    if any(isinstance(force, openmm.CMMotionRemover) for force in system.getForces()):
-        dof -= 3
-    return dof

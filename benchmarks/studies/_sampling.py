@@ -19,6 +19,7 @@ import openmm
 from openmm import unit
 
 import harness
+import rigidtesting
 import setups
 
 WATERS, QUICK_WATERS = 500, 216
@@ -66,7 +67,7 @@ def sample(name, config, step, seed, env, time=20.0, discard=2.0, every=0.1, kin
     model, context, integrator = contextFor(name, config, step, seed, env)
     system, water, n, kB = context.getSystem(), model.waters, len(model.waters), setups.BOLTZMANN
     rigid = config["integrator"].startswith("rigid")
-    dof = harness.rigidDegreesOfFreedom(context, integrator) if rigid else setups.stockDegreesOfFreedom(system)
+    dof = harness.rigidDegreesOfFreedom(context, integrator) if rigid else rigidtesting.degreesOfFreedom(system)
     masses, every = setups.rigidtesting.particleMasses(system), max(1, round(every*1000/step))*step/1000
     series, oxygens, boxes, axes = collections.defaultdict(list), [], [], []
     time, discard = (0.5, 0.1) if env.quick else (time, discard)

@@ -72,7 +72,7 @@ def prepared(job, env):
     context = setups.context(built, integrator, state, env.platform, env.properties, seed)
     if variant == "hangles": context.applyConstraints(1e-6)   # the start satisfies HBonds only
     context.setVelocitiesToTemperature(TEMPERATURE, seed + 1)
-    return context, integrator, setups.stockDegreesOfFreedom(built.system) if kind in ("stock", "recipe") else rigidDegreesOfFreedom(context, integrator)
+    return context, integrator, rigidtesting.degreesOfFreedom(built.system) if kind in ("stock", "recipe") else rigidDegreesOfFreedom(context, integrator)
 
 def measure(job, env):
     """One run: U, T and the solute's bonded U every `every_ps`, as block means and their errors (harness.blockMean)."""

@@ -4,6 +4,7 @@ import numpy as np
 import openmm
 from openmm import app, unit
 
+import rigidtesting
 import setups
 from harness import Study, Unstable, blockMean, molecularKineticEnergies, pyplot, radialDistribution
 
@@ -40,7 +41,7 @@ def measure(job, env):
     built, state = build(job["system"], env)
     integrator = setups.makeIntegrator(job["integrator"], stepFs, job["seed"], friction=1 if npt else 10)
     context = setups.context(built, integrator, state, env.platform, env.properties, job["seed"])
-    every, dof, n = int(round(100/stepFs)) if npt else 4, setups.stockDegreesOfFreedom(built.system), len(built.waters)
+    every, dof, n = int(round(100/stepFs)) if npt else 4, rigidtesting.degreesOfFreedom(built.system), len(built.waters)
     series, frames, boxes = {key: [] for key in KEYS}, [], []
     try:
         integrator.step(int(round(discard*1000/stepFs)))

@@ -113,11 +113,14 @@ def waterBox(model="tip4pew", molecules=None, edge=None, forceField=None, solute
 
 
 def degreesOfFreedom(system):
-    """OpenMM's count for a System: 3 per massive particle, less one per constraint and 3 more with a
-    CMMotionRemover (what a stock integrator's temperature uses)."""
-    massive = sum(1 for i in range(system.getNumParticles()) if system.getParticleMass(i) > 0*unit.dalton)
+    """OpenMM's count for a System, as app.StateDataReporter makes it: 3 per massive particle, less one per
+    constraint that involves a massive particle and 3 more with a CMMotionRemover (what a stock
+    integrator's temperature uses)."""
+    massive = [system.getParticleMass(i) > 0*unit.dalton for i in range(system.getNumParticles())]
+    constraints = sum(1 for i in range(system.getNumConstraints())
+                      if any(massive[j] for j in system.getConstraintParameters(i)[:2]))
     remover = any(isinstance(force, openmm.CMMotionRemover) for force in system.getForces())
-    return 3*massive - system.getNumConstraints() - (3 if remover else 0)
+    return 3*sum(massive) - constraints - (3 if remover else 0)
 
 
 # ---------------------------------------------------------------------------------------------------
