@@ -55,20 +55,20 @@ def water(model="tip3p", molecules=500, barostat=False, **options):
     return Built(topology, positions, system)
 
 
-def dipeptideInWater(molecules=500, barostat=True, hydrogenMass=3.0):
-    """Alanine dipeptide among TIP3P waters (amber14, HBonds, HMR), NPT by default."""
+def dipeptideInWater(molecules=500, barostat=True, hydrogenMass=3.0, constraints=app.HBonds):
+    """Alanine dipeptide among TIP3P waters (amber14, HBonds, HMR to `hydrogenMass` amu or none), NPT by default."""
     topology, positions, system = rigidtesting.waterBox(
         "tip3p", molecules=molecules, forceField=["amber14-all.xml", "amber14/tip3p.xml"],
-        solute=rigidtesting.alanineDipeptide(), constraints=app.HBonds, hydrogenMass=hydrogenMass*unit.amu)
+        solute=rigidtesting.alanineDipeptide(), constraints=constraints,
+        hydrogenMass=hydrogenMass and hydrogenMass*unit.amu)
     if barostat:
         system.addForce(openmm.MonteCarloBarostat(1.0, TEMPERATURE, 25))
     return Built(topology, positions, system)
 
 
-def villin(hydrogenMass=None, constraints=app.HBonds, heavyWaterHydrogens=False, padding=0.9):
+def villin(hydrogenMass=None, constraints=app.HBonds, padding=0.9):
     """Villin headpiece (openmm's app/data/test.pdb) re-solvated in TIP3P with Modeller: amber14, PME
-    0.9 nm, rigid water; the protein's bonded forces (BONDED) in force group 1, the rest in group 0.
-    heavyWaterHydrogens: water O 10, H 4 amu (the repartitioning OpenMM no longer does for water)."""
+    0.9 nm, rigid water."""
     import os
     pdb = app.PDBFile(os.path.join(os.path.dirname(app.__file__), "data", "test.pdb"))
     forceField = app.ForceField("amber14-all.xml", "amber14/tip3p.xml")
@@ -79,15 +79,20 @@ def villin(hydrogenMass=None, constraints=app.HBonds, heavyWaterHydrogens=False,
                    rigidWater=True, ewaldErrorTolerance=5e-4)
     if hydrogenMass:
         options["hydrogenMass"] = hydrogenMass*unit.amu
-    system = forceField.createSystem(modeller.topology, **options)
-    for force in system.getForces():
+    return Built(modeller.topology, modeller.positions, forceField.createSystem(modeller.topology, **options))
+
+
+def bondedApart(built, heavyWaterHydrogens=False):
+    """`built` with the solute's bonded forces (BONDED) in force group 1 and the rest in group 0, for multiple
+    time steps; heavyWaterHydrogens: water O 10, H 4 amu (the repartitioning OpenMM no longer does for water)."""
+    for force in built.system.getForces():
         force.setForceGroup(1 if isinstance(force, BONDED) else 0)
     if heavyWaterHydrogens:
-        for residue in modeller.topology.residues():
-            if residue.name == "HOH":
-                for atom in residue.atoms():
-                    system.setParticleMass(atom.index, (10.0 if atom.element == app.element.oxygen else 4.0)*unit.amu)
-    return Built(modeller.topology, modeller.positions, system)
+        oxygens = set(built.oxygens.tolist())
+        for index in built.waters.ravel():
+            built.system.setParticleMass(int(index), (10.0 if index in oxygens else 4.0)*unit.amu)
+        built.masses = rigidtesting.particleMasses(built.system)
+    return built
 
 
 def start(name, built, platform, properties, picoseconds=5.0, seed=1):

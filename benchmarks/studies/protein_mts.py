@@ -25,16 +25,18 @@ FULL = dict(equilibrate_ps=1.0, sampled_ps=4.0, every_ps=0.1, timed_s=2.0, repet
 QUICK = dict(equilibrate_ps=0.02, sampled_ps=0.1, every_ps=0.01, timed_s=0.0, repetitions=2)
 STARTS = {"villin": ("villin-tip3p-0.9nm", 5.0), "dipeptide": ("quick-dipeptide-tip3p-216", 0.2)}   # setups.start: name, ps
 
-def dipeptide(hydrogenMass=None, constraints=app.HBonds, heavyWaterHydrogens=False):
-    """Alanine dipeptide in 216 TIP3P waters, built as setups.villin() builds villin (the quick run's system)."""
-    built = setups.Built(*rigidtesting.waterBox("tip3p", 216, forceField=["amber14-all.xml", "amber14/tip3p.xml"], constraints=constraints,
-                                                 solute=rigidtesting.alanineDipeptide(), hydrogenMass=hydrogenMass and hydrogenMass*openmm.unit.amu))
-    for force in built.system.getForces(): force.setForceGroup(1 if isinstance(force, setups.BONDED) else 0)
-    for index in built.waters.ravel() if heavyWaterHydrogens else []: built.system.setParticleMass(index, 10.0 if index in built.oxygens else 4.0)
-    return built
+def dipeptide(hydrogenMass=None, constraints=app.HBonds):
+    """Alanine dipeptide in 216 TIP3P waters (setups.dipeptideInWater, constant volume): the quick run's system."""
+    return setups.dipeptideInWater(216, barostat=False, hydrogenMass=hydrogenMass, constraints=constraints)
 
-SYSTEMS = {"villin": setups.villin, "dipeptide": dipeptide}   # builder(hydrogenMass, constraints, heavyWaterHydrogens)
-build = functools.lru_cache(maxsize=None)(lambda system, variant: SYSTEMS[system](**VARIANTS[variant]))
+SYSTEMS = {"villin": setups.villin, "dipeptide": dipeptide}   # builder(hydrogenMass, constraints)
+
+@functools.lru_cache(maxsize=None)
+def build(system, variant):
+    """The system with a variant of VARIANTS, its bonded forces apart (setups.bondedApart)."""
+    options = dict(VARIANTS[variant])
+    heavy = options.pop("heavyWaterHydrogens", False)
+    return setups.bondedApart(SYSTEMS[system](**options), heavy)
 
 def stockRecipe(stepFs, substeps, temperature=TEMPERATURE, friction=FRICTION):
     """r-RESPA (Tuckerman, Berne & Martyna 1992) with the bonded forces (group 1) in `substeps` velocity Verlet steps and one exact O stage
