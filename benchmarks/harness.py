@@ -122,6 +122,14 @@ def overSeeds(estimates):
     return float(means.mean()), float(means.std(ddof=1)/np.sqrt(len(means)))
 
 
+def pm(value, digits, signed=False):
+    """'mean +- error' of a [mean, error] ('' for none, the mean alone for no error), with (n sigma) if signed."""
+    if not value or value[0] is None or value[0] != value[0]:
+        return ""
+    text = f"{value[0]:{'+' if signed else ''}.{digits}f}" + (f" +- {value[1]:.{digits}f}" if value[1] is not None else "")
+    return text + (f" ({value[0]/value[1]:+.1f} sigma)" if signed and value[1] else "")
+
+
 def slopeError(times, values, blocks=10):
     """Standard error of a series' slope from its block means (rigidtesting.stress.block_drift), or NaN."""
     if len(times)//blocks*blocks < 2*blocks:

@@ -169,16 +169,9 @@ def upTo(rows, stop, key="step"):
     rows = sorted(rows, key=lambda r: r[key])
     return rows[:next((i for i, r in enumerate(rows) if stop(r)), len(rows))]
 
-def pm(value, digits, signed=False):
-    """'mean +- error' of a [mean, error] ('' for none, the mean alone for no error), with (n sigma) if signed."""
-    if not value or value[0] is None or value[0] != value[0]:
-        return ""
-    text = f"{value[0]:{'+' if signed else ''}.{digits}f}" + (f" +- {value[1]:.{digits}f}" if value[1] is not None else "")
-    return text + (f" ({value[0]/value[1]:+.1f} sigma)" if signed and value[1] else "")
-
 def runsTable(page, rows, columns):
-    """A table: system, configuration, step, columns ((heading, key, digits, signed) for pm(), or (heading, f(row))), failure."""
-    cell = lambda r, c: c[1](r) if callable(c[1]) else pm(r.get(c[1]), *c[2:])
+    """A table: system, configuration, step, columns ((heading, key, digits, signed) for harness.pm(), or (heading, f(row))), failure."""
+    cell = lambda r, c: c[1](r) if callable(c[1]) else harness.pm(r.get(c[1]), *c[2:])
     columns = [c for c in columns if any(cell(r, c) for r in rows if r.get("runs", 1))]     # none empty in every row
     page.table(["system", "configuration", "step (fs)"] + [c[0] for c in columns] + ["failed"], [[r["system"], r["config"], r["step"]]
                + [cell(r, c) if r.get("runs", 1) else "" for c in columns] + [(r["failed"] or "")[:90]] for r in rows])

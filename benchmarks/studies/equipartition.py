@@ -6,7 +6,7 @@ import openmm
 import openmm.unit as unit
 
 import setups
-from harness import Study, Unstable, blockMean, overSeeds, pyplot
+from harness import Study, Unstable, blockMean, overSeeds, pm, pyplot
 
 NVE = ("stock-vv", "rigid-verlet", "rigid-verlet@0.04")
 HELD_HALF_STEP = ("stock-middle", "rigid-langevin", "rigid-langevin@0.04")   # velocities half a step off the positions
@@ -105,10 +105,6 @@ def summarize(results, env):
     return rows
 
 
-def cell(value, error, digits=1):
-    return "" if value is None else f"{value:.{digits}f} +- {error:.{digits}f}" if error is not None else f"{value:.{digits}f}"
-
-
 def quadraticShift(rows, system, integrator):
     """a +- its error in T_rot - T_trans = a dt^2, weighted least squares through the origin over the job's steps."""
     points = [(row["step"], row["diff"], row["diffError"]) for row in rows if row["system"] == system
@@ -124,7 +120,7 @@ def report(rows, page):
     fits = [(name, quadraticShift(rows, "spce", name)) for name in NVE + ("stock-vrorv",) + HELD_HALF_STEP]
     page.section("The shift against the step", "SPC/E, T_rot - T_trans fitted as a dt^2 over each integrator's steps "
                  "(K/fs^2; a second-order integrator's error in the momenta grows so):")
-    page.table(["integrator", "a (K/fs^2)"], [[name, cell(*fit, digits=3)] for name, fit in fits if fit])
+    page.table(["integrator", "a (K/fs^2)"], [[name, pm(fit, 3)] for name, fit in fits if fit])
     for system in dict.fromkeys(row["system"] for row in rows):
         page.section(MODELS.get(system, system), "T_rot - T_trans per run (K), means over independent starts +- the "
                      "standard error of their spread; T_conf: the temperature at which the reference's U matches "
@@ -134,9 +130,9 @@ def report(rows, page):
         table = []
         for row in (row for row in rows if row["system"] == system):
             status = row["failed"] or ("not run: a smaller step failed" if row["blocked"] else "")
-            table.append([row["integrator"], f"{row['step']:g}", row["starts"], cell(row["trans"], row["transError"]),
-                          cell(row["rot"], row["rotError"]), cell(row["diff"], row["diffError"]),
-                          cell(row.get("conf"), row.get("confError")), cell(row["onStep"], row["onStepError"]), status])
+            table.append([row["integrator"], f"{row['step']:g}", row["starts"], pm([row["trans"], row["transError"]], 1),
+                          pm([row["rot"], row["rotError"]], 1), pm([row["diff"], row["diffError"]], 1),
+                          pm([row.get("conf"), row.get("confError")], 1), pm([row["onStep"], row["onStepError"]], 1), status])
         page.table(["integrator", "step (fs)", "starts", "T_trans (K)", "T_rot (K)", "T_rot - T_trans (K)",
                     "T_conf (K)", "T on-step (K)", "failed"], table)
     plt = pyplot()

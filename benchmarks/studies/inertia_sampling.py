@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from harness import Study, nsPerDay, pyplot
+from harness import Study, nsPerDay, pm, pyplot
 from studies import _sampling as sampling
 
 STEPS = {"stock": [2, 4, 6, 8, 10], "stock-heavy": [4, 8, 10, 12, 14], "rigid": [2, 4, 6, 8, 10],
@@ -65,7 +65,7 @@ def report(summary, page):
                          + [versus(c, "stock"), versus(c, "stock-heavy")])
         dynamics = {c: np.array([fits[c].get(k) for k in ("D", "tauRot", "tauU")], dtype=float) for c in speed}   # None: nan
         rate = {c: np.array([1/(2*tauU), D, 1/tauRot])*speed[c]*1000/24 for c, (D, tauRot, tauU) in dynamics.items()}
-        hourly += [[system, c] + [sampling.pm([v, None], digits) for v, digits in zip([*dynamics[c], r[0], *r/rate["stock"]],
+        hourly += [[system, c] + [pm([v, None], digits) for v, digits in zip([*dynamics[c], r[0], *r/rate["stock"]],
                    (2, 2, 2, 0, 2, 2, 2))] for c, r in rate.items() if "stock" in rate]
         colors = sampling.biasPanel(axis, [r for r in mine if not r["failed"]], "dU", 0.6)
         for c, f in fits.items():
@@ -87,7 +87,7 @@ def report(summary, page):
     page.table(["system", "configuration", "D (1e-5 cm^2/s)", "tau_1 (ps)", "tau_U (ps)", "U samples/h", "vs stock: U samples",
                 "D t", "rotations"], hourly)
     page.section("Every run", "Means over the starts against each system's reference, its 2 fs runs of stock and rigid pooled ("
-                 + "; ".join(f"{s} {sampling.pm(ref['U'], 3)} kJ/mol" for s, ref in summary["references"].items()) + ").")
+                 + "; ".join(f"{s} {pm(ref['U'], 3)} kJ/mol" for s, ref in summary["references"].items()) + ").")
     sampling.runsTable(page, rows, [("U/water (kJ/mol)", "U", 3), ("bias", "dU", 3, True), ("g_OO shell", "gShell", 3),
                                     ("its bias", "dgShell", 3, True), ("T (K)", "T", 1)])
 

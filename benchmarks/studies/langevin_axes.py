@@ -1,6 +1,6 @@
 """Where the kinetic energy of rigid water sits at large Langevin steps: translation and each principal axis."""
 
-from harness import Study, pyplot
+from harness import Study, pm, pyplot
 from studies import _sampling as sampling
 
 def measure(job, env):
@@ -14,7 +14,7 @@ def summarize(results, env):
 def report(summary, page):
     axis = lambda r, i: [r["Taxes"][0][i], r["Taxes"][1][i]]
     sampling.runsTable(page, summary, [("friction (1/ps)", lambda r: r["friction"]), ("T reported (K)", "T", 1), ("T translation (K)", "Ttrans", 1)]
-                       + [(f"T rotation, {n} moment (K)", lambda r, i=i: sampling.pm(axis(r, i), 1)) for i, n in enumerate(("least", "middle", "largest"))])
+                       + [(f"T rotation, {n} moment (K)", lambda r, i=i: pm(axis(r, i), 1)) for i, n in enumerate(("least", "middle", "largest"))])
     names = list(dict.fromkeys(r["system"] for r in summary))
     figure, axes = pyplot().subplots(2, len(names), figsize=(5*len(names), 7), squeeze=False)
     for column, system in enumerate(names):
