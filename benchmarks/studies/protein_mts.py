@@ -18,9 +18,11 @@ CONFIGURATIONS = {   # name: (label, model, steps (fs), system variant, integrat
     # protein_step_cap's variants of xh-mts at one step, not in this study's grid
     "xh-mts-1fs": ("rigid X-H groups + bonded 1 fs", "rigid X-H", [12], "plain", "rigid-mts"),
     "xh-mts-0.32": ("the same, moments raised to 0.32", "rigid X-H", [12], "plain", "rigid-mts"),
-    "xh-mts-f5": ("the same, friction 5/ps", "rigid X-H", [12], "plain", "rigid-mts")}
-REFERENCE = {"flexible": ("stock", 2), "H angles": ("hangles", 2), "rigid X-H": ("xh", 2)}
-OVERRIDES = {"xh-mts-1fs": dict(substep=1.0), "xh-mts-0.32": dict(floor=0.32), "xh-mts-f5": dict(friction=5.0)}   # of FLOOR, SUBSTEP, FRICTION
+    "xh-mts-f5": ("the same, friction 5/ps", "rigid X-H", [12], "plain", "rigid-mts"),
+    "planar": ("rigid X-H and planar groups", "rigid planar", [2], "plain", "rigid-planar"),
+    "planar-mts": ("rigid X-H and planar groups + bonded 1 fs", "rigid planar", [8, 10, 12, 14], "plain", "rigid-planar-mts")}
+REFERENCE = {"flexible": ("stock", 2), "H angles": ("hangles", 2), "rigid X-H": ("xh", 2), "rigid planar": ("planar", 2)}
+OVERRIDES = {"xh-mts-1fs": dict(substep=1.0), "xh-mts-0.32": dict(floor=0.32), "xh-mts-f5": dict(friction=5.0), "planar-mts": dict(substep=1.0)}   # of FLOOR, SUBSTEP, FRICTION
 FULL = dict(equilibrate_ps=1.0, sampled_ps=4.0, every_ps=0.1, timed_s=2.0, repetitions=5)
 QUICK = dict(equilibrate_ps=0.02, sampled_ps=0.1, every_ps=0.01, timed_s=0.0, repetitions=2)
 STARTS = {"villin": ("villin-tip3p-0.9nm", 5.0), "dipeptide": ("quick-dipeptide-tip3p-216", 0.2)}   # setups.start: name, ps
@@ -63,7 +65,7 @@ def prepared(job, env):
     _, _, _, variant, kind = CONFIGURATIONS[job["configuration"]]
     built, step, seed, (name, picoseconds) = build(job["system"], variant), job["step"], job["seed"], STARTS[job["system"]]
     state = setups.start(name, build(job["system"], "plain"), env.platform, env.properties, picoseconds)
-    bodies = openmmrigid.rigidHydrogenGroups(built.topology, built.system) if kind.startswith("rigid") else None
+    bodies = openmmrigid.rigidHydrogenGroups(built.topology, built.system, planarGroups="planar" in kind) if kind.startswith("rigid") else None
     floor, substep, friction = (OVERRIDES.get(job["configuration"], {}).get(key, default)
                                 for key, default in (("floor", FLOOR), ("substep", SUBSTEP), ("friction", FRICTION)))
     integrator = stockRecipe(step, max(2, round(step/substep))) if kind == "recipe" else setups.makeIntegrator(
@@ -175,7 +177,7 @@ positions exact). One small protein, CPU only: GPUs, larger systems and slow obs
 (protein_step_cap) the 2 fs substeps show a bonded-energy bias of about +50 kJ/mol at every outer step, 1 fs substeps remove it
 up to 8 fs (1.6 times stock HMR 4 fs), and stock HMR at 4 fs shows +328 kJ/mol in U: read this page's 10 fs at its resolution.""",
     grid=[{"system": ["villin"], "configuration": [name], "step": c[2], "seed": [0, 1, 2]} for name, c in CONFIGURATIONS.items()
-          if name not in OVERRIDES],
+          if name not in OVERRIDES and not name.startswith("planar")],
     quick=[{"system": ["dipeptide"], "configuration": [name], "step": c[2][:1], "seed": [0]} for name, c in CONFIGURATIONS.items()
-           if name not in OVERRIDES],
+           if name not in OVERRIDES and not name.startswith("planar")],
     measure=measure, summarize=summarize)

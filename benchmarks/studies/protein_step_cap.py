@@ -40,7 +40,10 @@ dynamics, and at 12 fs with 2 fs substeps its +26 +- 13 does not exclude the inn
           {"system": ["villin"], "configuration": ["stock"], "step": [2], "seed": range(6)},
           {"system": ["villin"], "configuration": ["stock-hmr"], "step": [4], "seed": range(6)},
           {"system": ["villin"], "configuration": ["xh-mts", "xh-mts-1fs"], "step": [4, 8, 10], "seed": range(6)},
-          {"system": ["villin"], "configuration": PROBES, "step": [12], "seed": [0, 1, 2]}],
+          {"system": ["villin"], "configuration": PROBES, "step": [12], "seed": [0, 1, 2]},
+          {"system": ["villin"], "configuration": ["planar"], "step": [2], "seed": range(6)},
+          {"system": ["villin"], "configuration": ["planar-mts"], "step": [8, 10, 12, 14], "seed": range(6)}],
     quick=[{"system": ["dipeptide"], "configuration": ["xh"], "step": [2], "seed": [0]},
-           {"system": ["dipeptide"], "configuration": PROBES, "step": [6], "seed": [0]}],
+           {"system": ["dipeptide"], "configuration": PROBES + ["planar-mts"], "step": [6], "seed": [0]},
+           {"system": ["dipeptide"], "configuration": ["planar"], "step": [2], "seed": [0]}],
     measure=protein_mts.measure, summarize=protein_mts.summarize, report=report)
