@@ -278,7 +278,8 @@ protected:
      * raised moments (the projection onto rigid motion keeps the angular velocity of the particles).
      * Where OpenMM then takes the velocities back by getVelocityTimeOffset() (F_i offset / m_i), each
      * raised body's angular velocity is first corrected so that the torque turns it with the raised
-     * moments.
+     * moments; with multiple time steps, where the held velocities lag half a kick of the slowest
+     * level's forces only, the other groups' share of OpenMM's offset is given back.
      */
     std::vector<OpenMM::Vec3> getVelocitiesForTemperature(const OpenMM::System& system, double temperature, int randomSeed) const;
     /**
@@ -346,6 +347,12 @@ private:
     const std::vector<std::vector<int> >& getExplicitBodies() const {
         return bodies;
     }
+    /**
+     * getVelocitiesForTemperature()'s raised-moment correction of a draw: each raised body's angular
+     * velocity scaled by sqrt(I_k / I'_k), and turned by offset (1/I_k - 1/I'_k) tau with the torque of
+     * the force groups whose offset OpenMM's Context is left to take.
+     */
+    std::vector<OpenMM::Vec3> raisedVelocities(std::vector<OpenMM::Vec3> velocities, double offset, int groups) const;
     /** The degrees of freedom of computeSystemTemperature(). */
     int getNumDegreesOfFreedom() const;
     /** Body b, with its shape (an OpenMMException if it is an explicit body whose positions were never set). */

@@ -221,7 +221,34 @@ const RigidBodySystem& RigidBodyIntegratorBase::getShapedBody(int index) const {
 
 vector<Vec3> RigidBodyIntegratorBase::getVelocitiesForTemperature(const System& system, double temperature, int randomSeed) const {
     vector<Vec3> velocities = Integrator::getVelocitiesForTemperature(system, temperature, randomSeed);
-    if (!bound || !topology->hasRaisedMoments())
+    if (!bound)
+        return velocities;
+    // OpenMM's Context takes the drawn velocities back by getVelocityTimeOffset() with the forces of
+    // every group (F_i offset / m_i). With multiple time steps the velocities the integrator holds lag
+    // half a kick of the slowest level's forces only (the faster levels' kicks close within the
+    // step): the other groups' share is given back at the end, and the slowest forces are the ones
+    // that turn the raised bodies below.
+    const double offset = getVelocityTimeOffset();
+    const bool nested = (offset != 0.0 && levels.size() > 1);
+    if (nested) {
+        vector<Vec3> fast;
+        context->calcForcesAndEnergy(true, false, ~levels[0].groups);
+        context->getForces(fast);
+        for (int i = 0; i < system.getNumParticles(); i++)
+            if (system.getParticleMass(i) != 0.0)
+                fast[i] *= offset/system.getParticleMass(i);
+            else
+                fast[i] = Vec3();
+        velocities = raisedVelocities(velocities, offset, levels[0].groups);
+        for (int i = 0; i < system.getNumParticles(); i++)
+            velocities[i] += fast[i];
+        return velocities;
+    }
+    return raisedVelocities(velocities, offset, -1);
+}
+
+vector<Vec3> RigidBodyIntegratorBase::raisedVelocities(vector<Vec3> velocities, double offset, int groups) const {
+    if (!topology->hasRaisedMoments())
         return velocities;
     // OpenMM draws each particle's velocity from its mass; projected onto rigid motion, a body's angular
     // velocity about principal axis k then has the variance kT / I_k of its particles' moment I_k. The
@@ -232,10 +259,9 @@ vector<Vec3> RigidBodyIntegratorBase::getVelocitiesForTemperature(const System& 
     // OpenMM then takes velocities with a time offset (RigidBodyLangevinIntegrator's dt/2) back by
     // offset F_i / m_i, which turns a body's angular velocity by offset I^-1 tau, with the moments of
     // its particles; the body's own is offset I'^-1 tau. The difference is added here.
-    const double offset = getVelocityTimeOffset();
     vector<Vec3> positions, forces;
     if (offset != 0.0) {
-        context->calcForcesAndEnergy(true, false, -1);
+        context->calcForcesAndEnergy(true, false, groups);
         context->getForces(forces);
     }
     context->getPositions(positions);

@@ -300,3 +300,20 @@ def test_compound_integrator_steps_as_the_integrator_alone(mixed):
             assert np.all(np.isfinite(positions_of(context)))
             assert np.abs(positions_of(context) - runs[-1]).max() > 0
     assert np.array_equal(runs[0], runs[1])
+
+
+@pytest.mark.parametrize("floor", [None, 0.05])
+def test_velocities_drawn_for_a_temperature_are_on_step_with_substeps(mixed, floor):
+    """setVelocitiesToTemperature draws on-step velocities and takes them back by the offset the
+    integrator holds: with substeps half a kick of the slowest forces only (OpenMM's Context takes
+    every group's). The same draw with and without substeps must then be the same on-step
+    velocities: the same on-step kinetic energy, with raised moments too."""
+    energies = []
+    for substeps in (None, [(0, 1), (FAST_GROUP, 4)]):
+        integrator = make("langevin", 0.004, mixed.bodies, substeps)
+        if floor is not None:
+            integrator.setMinimumMomentOfInertia(floor)
+        context = start(mixed.split, integrator, "Reference", mixed.positions, mixed.velocities)
+        context.setVelocitiesToTemperature(300, 5)
+        energies.append(integrator.getOnStepKineticEnergy().value_in_unit(KJ))
+    assert energies[1] == pytest.approx(energies[0], rel=1e-10)
