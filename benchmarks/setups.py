@@ -25,6 +25,7 @@ FRICTION = 1.0                      # 1/ps
 BOLTZMANN = 0.00831446261815324     # kJ/mol/K
 KJ = unit.kilojoule_per_mole
 BONDED = (openmm.HarmonicBondForce, openmm.HarmonicAngleForce, openmm.PeriodicTorsionForce, openmm.CMAPTorsionForce)
+WATER = {"HOH", "WAT"}              # water's residue names: openmm.app's, Amber's
 
 # ---------------------------------------------------------------------------------------------------
 # Systems
@@ -32,11 +33,11 @@ BONDED = (openmm.HarmonicBondForce, openmm.HarmonicAngleForce, openmm.PeriodicTo
 
 class Built:
     """A system as a study uses it: topology, positions, System, and the indices of each water's
-    massive atoms (molecules x atoms; empty for none)."""
+    massive atoms (molecules x atoms; empty for none; a water is a residue named as in WATER)."""
 
     def __init__(self, topology, positions, system):
         self.topology, self.positions, self.system = topology, positions, system
-        waters = [residue for residue in topology.residues() if residue.name == "HOH"]
+        waters = [residue for residue in topology.residues() if residue.name in WATER]
         massive = [[atom.index for atom in residue.atoms() if system.getParticleMass(atom.index) > 0*unit.dalton]
                    for residue in waters]
         self.waters = np.array(massive, dtype=int) if massive else np.zeros((0, 3), dtype=int)
@@ -80,6 +81,20 @@ def villin(hydrogenMass=None, constraints=app.HBonds, padding=0.9):
     if hydrogenMass:
         options["hydrogenMass"] = hydrogenMass*unit.amu
     return Built(modeller.topology, modeller.positions, forceField.createSystem(modeller.topology, **options))
+
+
+def dhfr(hydrogenMass=None, constraints=app.HBonds):
+    """Dihydrofolate reductase in TIP3P, the Joint Amber-CHARMM benchmark (JAC, 23,558 atoms; openmmtools' data/dhfr):
+    its Amber prmtop and restart read by openmm.app (the restart's box, 6.16 nm), PME 0.9 nm as villin."""
+    import importlib.util, os   # found, not imported: openmmtools' import is slow and loud
+    folder = os.path.join(importlib.util.find_spec("openmmtools").submodule_search_locations[0], "data", "dhfr")
+    prmtop = app.AmberPrmtopFile(os.path.join(folder, "JAC.prmtop"))
+    inpcrd = app.AmberInpcrdFile(os.path.join(folder, "JAC.inpcrd"))
+    system = prmtop.createSystem(nonbondedMethod=app.PME, nonbondedCutoff=0.9*unit.nanometer, constraints=constraints,
+                                 rigidWater=True, ewaldErrorTolerance=5e-4, hydrogenMass=hydrogenMass and hydrogenMass*unit.amu)
+    system.setDefaultPeriodicBoxVectors(*inpcrd.boxVectors)
+    prmtop.topology.setPeriodicBoxVectors(inpcrd.boxVectors)
+    return Built(prmtop.topology, inpcrd.positions, system)
 
 
 def bondedApart(built, heavyWaterHydrogens=False):

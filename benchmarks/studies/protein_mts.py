@@ -1,8 +1,9 @@
 """Rigid X-H groups and multiple time steps against stock OpenMM on a solvated protein. Another system: SYSTEMS, STARTS, the grid."""
-import functools, itertools
+import functools, itertools, types
 import numpy as np, openmm, openmm.app as app
 import openmmrigid, rigidtesting, setups
 from harness import Study, Unstable, blockMean, overSeeds, blockSteps, nsPerDay, pyplot, rigidDegreesOfFreedom, timeInterleaved
+from rigidtesting.bodies import integratorBodies, kineticEnergies
 from setups import BOLTZMANN, FRICTION, KJ, TEMPERATURE
 
 FLOOR, SUBSTEP = 0.16, 2.0   # the rigid rows' raised moments (amu nm^2); the bonded forces' substep (fs)
@@ -25,13 +26,14 @@ REFERENCE = {"flexible": ("stock", 2), "H angles": ("hangles", 2), "rigid X-H": 
 OVERRIDES = {"xh-mts-1fs": dict(substep=1.0), "xh-mts-0.32": dict(floor=0.32), "xh-mts-f5": dict(friction=5.0), "planar-mts": dict(substep=1.0)}   # of FLOOR, SUBSTEP, FRICTION
 FULL = dict(equilibrate_ps=1.0, sampled_ps=4.0, every_ps=0.1, timed_s=2.0, repetitions=5)
 QUICK = dict(equilibrate_ps=0.02, sampled_ps=0.1, every_ps=0.01, timed_s=0.0, repetitions=2)
-STARTS = {"villin": ("villin-tip3p-0.9nm", 5.0), "dipeptide": ("quick-dipeptide-tip3p-216", 0.2)}   # setups.start: name, ps
+STARTS = {"villin": ("villin-tip3p-0.9nm", 5.0), "dipeptide": ("quick-dipeptide-tip3p-216", 0.2), "dhfr": ("dhfr-jac-tip3p", 5.0)}   # setups.start: name, ps
+EXTRA = {"T_solute": ("T solute bias (K)", 1), "helix": ("helix bias", 3), "dihedral_rms": ("dihedral rms bias (deg)", 1)}   # runs since: column, digits
 
 def dipeptide(hydrogenMass=None, constraints=app.HBonds):
     """Alanine dipeptide in 216 TIP3P waters (setups.dipeptideInWater, constant volume): the quick run's system."""
     return setups.dipeptideInWater(216, barostat=False, hydrogenMass=hydrogenMass, constraints=constraints)
 
-SYSTEMS = {"villin": setups.villin, "dipeptide": dipeptide}   # builder(hydrogenMass, constraints)
+SYSTEMS = {"villin": setups.villin, "dipeptide": dipeptide, "dhfr": setups.dhfr}   # builder(hydrogenMass, constraints)
 
 @functools.lru_cache(maxsize=None)
 def build(system, variant):
@@ -78,35 +80,73 @@ def prepared(job, env):
     context.setVelocitiesToTemperature(TEMPERATURE, seed + 1)
     return context, integrator, rigidtesting.degreesOfFreedom(built.system) if kind in ("stock", "recipe") else rigidDegreesOfFreedom(context, integrator)
 
+def solute(built):
+    """The protein's particles, a mask: those of residues that are neither water nor one ion."""
+    return np.array([atom.residue.name not in setups.WATER and len(atom.residue) > 1 for atom in built.topology.atoms()])
+
+def soluteKinetic(context, integrator, inside):
+    """(kinetic energy (kJ/mol) of a State's particles in `inside` (a mask), their degrees of freedom), as the T column counts the whole system's:
+    the kinetic energy of rigid motion in the raised moments (the State's; rigidtesting.bodies.kineticEnergies) of the bodies inside and the free
+    particles, and harness.rigidDegreesOfFreedom read on a copy of the System whose other particles are massless, with the bodies inside (a stock
+    integrator has none); a CMMotionRemover's 3 are given back: it fixes the whole system's momentum, not the part's."""
+    system = openmm.XmlSerializer.deserialize(openmm.XmlSerializer.serialize(context.getSystem()))
+    for i in np.flatnonzero(~inside): system.setParticleMass(int(i), 0.0)
+    bodies = [body for body in integratorBodies(integrator) if inside[body].all()] if hasattr(integrator, "getNumBodies") else []
+    dof = rigidDegreesOfFreedom(types.SimpleNamespace(getSystem=lambda: system, getState=context.getState),
+                                types.SimpleNamespace(getNumBodies=lambda: len(bodies), getBodyParticles=bodies.__getitem__))
+    masses, floor = rigidtesting.particleMasses(system), integrator.getMinimumMomentOfInertia() if bodies else 0.0
+    kinetic = lambda state: sum(kineticEnergies(state.getPositions(asNumpy=True)._value, state.getVelocities(asNumpy=True)._value, masses, bodies,
+                                                floor, state.getPeriodicBoxVectors(asNumpy=True)._value))
+    return kinetic, dof + 3*any(isinstance(force, openmm.CMMotionRemover) for force in system.getForces())
+
+def helical(phi, psi):
+    """Whether (phi, psi) (deg) is in the alpha-helical basin: xh_groups_model.analyse's (test_studies_proteins checks they agree)."""
+    return (phi > -160) & (phi < -20) & (psi > -120) & (psi < 50)
+
+def dihedralFluctuation(angles):
+    """The rms fluctuation (deg) of each dihedral (columns of frames x dihedrals, deg) about its own circular mean, averaged over the dihedrals."""
+    turns = np.exp(1j*np.radians(angles))
+    return float(np.degrees(np.sqrt(np.mean(np.angle(turns/turns.mean(axis=0))**2, axis=0))).mean())
+
 def measure(job, env):
-    """One run: U, T and the solute's bonded U every `every_ps`, as block means and their errors (harness.blockMean)."""
-    settings, step, samples = QUICK if env.quick else FULL, job["step"], []
+    """One run: every `every_ps` U, T, the solute's bonded U, its temperature (soluteKinetic) and its share of alpha-helical (phi, psi), as block
+    means and their errors (harness.blockMean); the rms fluctuation of phi and psi within the run (dihedralFluctuation; no error)."""
+    from studies.xh_groups_model import backboneDihedrals, geometry   # here, not above: that module imports this one
+    settings, step, samples, frames = QUICK if env.quick else FULL, job["step"], [], []
     context, integrator, dof = prepared(job, env)
+    built = build(job["system"], CONFIGURATIONS[job["configuration"]][3])
+    (kinetic, soluteDof), dihedrals = soluteKinetic(context, integrator, solute(built)), np.concatenate(backboneDihedrals(built.topology))
     try:
         integrator.step(round(settings["equilibrate_ps"]*1000/step))
         for _ in range(round(settings["sampled_ps"]/settings["every_ps"])):
             integrator.step(max(1, round(settings["every_ps"]*1000/step)))
-            state, bonded = context.getState(getEnergy=True), context.getState(getEnergy=True, groups={1})
+            state, bonded = context.getState(getEnergy=True, getPositions=True, getVelocities=True), context.getState(getEnergy=True, groups={1})
+            frames.append(geometry(state.getPositions(asNumpy=True)._value, dihedrals))
             samples.append([state.getPotentialEnergy().value_in_unit(KJ), 2*state.getKineticEnergy().value_in_unit(KJ)/(dof*BOLTZMANN),
-                            bonded.getPotentialEnergy().value_in_unit(KJ)])
+                            bonded.getPotentialEnergy().value_in_unit(KJ), 2*kinetic(state)/(soluteDof*BOLTZMANN),
+                            helical(*np.split(frames[-1], 2)).mean()])
     except openmm.OpenMMException as error:
         raise Unstable(str(error).split(";")[0])
     if not np.all(np.isfinite(samples)): raise Unstable(f"non-finite energy within {len(samples)*settings['every_ps']:g} ps")
-    return {name: [float(v) for v in blockMean(column)] for name, column in zip(("U", "T", "bonded"), np.array(samples).T)}
+    return dict({name: [float(v) for v in blockMean(column)] for name, column in zip(("U", "T", "bonded", "T_solute", "helix"), np.array(samples).T)},
+                dihedral_rms=[dihedralFluctuation(frames), None])
 
 def biasRows(results):
-    """Rows: U, T, the solute's bonded U ([mean, error]) over the seeds, and their biases against the model's reference."""
+    """Rows: U, T, the solute's bonded U and the EXTRA observables its runs have ([mean, error]) over the seeds, and the biases of all but T
+    against the model's reference (no error where a mean has none)."""
     rows = []
     for result in results:
-        job, ok = result["job"], result["samples"] and not result["failed"]
+        job, ok, samples = result["job"], result["samples"] and not result["failed"], result["samples"]
         rows.append(dict(job, against="{} model, {} fs".format(model := CONFIGURATIONS[job["configuration"]][1], REFERENCE[model][1]),
-                         seeds=len(result["samples"]), failed=result["failed"] or ("blocked" if result["blocked"] else None),
-                         **{k: overSeeds([s[k] for s in result["samples"]]) if ok else None for k in ("U", "T", "bonded")}))
+                         seeds=len(samples), failed=result["failed"] or ("blocked" if result["blocked"] else None),
+                         **{k: overSeeds([s[k] for s in samples]) if ok else None for k in ("U", "T", "bonded")},
+                         **{k: overSeeds([s[k] for s in samples]) for k in EXTRA if ok and all(k in s for s in samples)}))
     ran = {(row["system"], row["configuration"], row["step"]): row for row in rows if row["U"]}
     for row in ran.values():
         ref = ran.get((row["system"], *REFERENCE[CONFIGURATIONS[row["configuration"]][1]]))
-        for k in ("U", "bonded") if ref else ():
-            row[f"{k}_bias"], row[f"{k}_bias_error"] = row[k][0] - ref[k][0], float(np.hypot(row[k][1], ref[k][1]))
+        for k in [k for k in ("U", "bonded", *EXTRA) if k in row and k in (ref or {})]:
+            row[f"{k}_bias"] = row[k][0] - ref[k][0]
+            row[f"{k}_bias_error"] = None if None in (row[k][1], ref[k][1]) else float(np.hypot(row[k][1], ref[k][1]))
     return rows, ran
 
 def summarize(results, env):
@@ -131,17 +171,21 @@ def accurateSteps(rows):
     return found
 
 def section(page, title, text, rows):
-    """A section: the text, then the rows' biases (bold beyond two errors), T, ns/day, x stock HMR 4 fs, and the accurate steps."""
+    """A section: the text, then the rows' biases (bold beyond two errors; the EXTRA ones' only where rows have them), T, ns/day, x stock HMR
+    4 fs, and the accurate steps."""
     page.section(title, text)
-    bias = lambda row, k, f: "" if row.get(k + "_bias") is None else ("**{}**" if abs(row[k + "_bias"]) > 2*row[k + "_bias_error"] else "{}").format(
-        f"{row[k + '_bias']:+.{f}f} ± {row[k + '_bias_error']:.{f}f}")
+    bias = lambda row, k, f: "" if row.get(k + "_bias") is None else f"{row[k + '_bias']:+.{f}f}" if row[k + "_bias_error"] is None else (
+        "**{}**" if abs(row[k + "_bias"]) > 2*row[k + "_bias_error"] else "{}").format(f"{row[k + '_bias']:+.{f}f} ± {row[k + '_bias_error']:.{f}f}")
     base, accurate = ([r.get("ns_per_day") for r in rows if (r["configuration"], r["step"]) == ("stock-hmr", 4)] + [None])[0], accurateSteps(rows)
-    page.table(["configuration", "step (fs)", "against", "U bias (kJ/mol)", "bonded U bias (kJ/mol)", "T (K)", "ns/day", "x stock HMR 4 fs",
-                "accurate step"], [[CONFIGURATIONS[row["configuration"]][0], row["step"], row["against"], bias(row, "U", 0), bias(row, "bonded", 1),
-                                    "" if row["T"] is None else f"{row['T'][0]:.1f}" + ("" if row["T"][1] is None else f" ± {row['T'][1]:.1f}"),
-                                    *([f"{row['ns_per_day']:.1f}", f"{row['ns_per_day']/(base or np.nan):.2f}"] if row.get("ns_per_day") else ["", ""]),
-                                    row["failed"] or ("reference" if (row["configuration"], row["step"]) in REFERENCE.values() else
-                                                     "**yes**" if accurate[row["configuration"]] == row["step"] else "")] for row in rows])
+    extra = [k for k in EXTRA if any(row.get(k) for row in rows)]
+    page.table(["configuration", "step (fs)", "against", "U bias (kJ/mol)", "bonded U bias (kJ/mol)", *[EXTRA[k][0] for k in extra], "T (K)",
+                "ns/day", "x stock HMR 4 fs", "accurate step"],
+               [[CONFIGURATIONS[row["configuration"]][0], row["step"], row["against"], bias(row, "U", 0), bias(row, "bonded", 1),
+                 *[bias(row, k, EXTRA[k][1]) for k in extra],
+                 "" if row["T"] is None else f"{row['T'][0]:.1f}" + ("" if row["T"][1] is None else f" ± {row['T'][1]:.1f}"),
+                 *([f"{row['ns_per_day']:.1f}", f"{row['ns_per_day']/(base or np.nan):.2f}"] if row.get("ns_per_day") else ["", ""]),
+                 row["failed"] or ("reference" if (row["configuration"], row["step"]) in REFERENCE.values() else
+                                   "**yes**" if accurate[row["configuration"]] == row["step"] else "")] for row in rows])
 
 def report(summary, page):
     for system in dict.fromkeys(row["system"] for row in summary["rows"]):

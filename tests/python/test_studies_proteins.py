@@ -1,6 +1,8 @@
 """The analysis code of the protein studies (benchmarks/studies/protein_mts.py, xh_groups_model.py): the stock recipe's
 CustomIntegrator against an independent r-RESPA and against BAOAB's exact harmonic sampling, the accurate-step rule,
-the error over independent runs, and the angle and dihedral geometry against OpenMM's own."""
+the error over independent runs, the angle and dihedral geometry against OpenMM's own, and the solute's observables
+(its temperature against a count by hand and the State's kinetic energy, the helical basin, the dihedrals' fluctuation,
+their biases and columns)."""
 
 import json
 import pathlib
@@ -16,7 +18,10 @@ sys.path.insert(0, str(ROOT/"benchmarks"))
 pytest.importorskip("harness")
 from studies import protein_mts, xh_groups_model  # noqa: E402
 
+import openmmrigid  # noqa: E402
 import rigidtesting  # noqa: E402
+import setups  # noqa: E402
+from harness import rigidDegreesOfFreedom  # noqa: E402
 
 BOLTZMANN = protein_mts.BOLTZMANN
 
@@ -146,3 +151,81 @@ def test_angle_types_and_backbone_dihedrals_of_alanine_dipeptide():
     phi, psi = xh_groups_model.backboneDihedrals(pdb.topology)
     names = [[atom.name for atom in pdb.topology.atoms()][i] for i in (*phi[0], *psi[0])]
     assert (phi.shape, psi.shape, names) == ((1, 4), (1, 4), ["C", "N", "CA", "C", "N", "CA", "C", "N"])
+
+
+@pytest.mark.parametrize("rigid", [False, True])
+def test_solute_degrees_of_freedom_by_hand_and_kinetic_energy_split_of_the_states(rigid):
+    """The dipeptide's degrees of freedom counted by hand from the topology (stock, HBonds: 3 per atom less one per X-H bond;
+    rigid X-H groups: 3 per heavy atom without hydrogens, 5 per X-H, 6 per XH2 or XH3), the waters' 6 each, the whole system's
+    count less the CMMotionRemover's 3; and the solute's and the water's kinetic energies (rigid: in moments raised to 0.16)
+    add up to the State's, which the integrator sums on its own."""
+    built = protein_mts.dipeptide()
+    protein = protein_mts.solute(built)
+    hydrogens = {atom.index: 0 for atom in built.topology.atoms() if protein[atom.index] and atom.element.symbol != "H"}
+    for bond in built.topology.bonds():
+        heavy = [atom.index for atom in bond if atom.element.symbol != "H"]
+        if len(heavy) == 1 and heavy[0] in hydrogens:
+            hydrogens[heavy[0]] += 1
+    byHand = sum({0: 3, 1: 5}.get(n, 6) for n in hydrogens.values()) if rigid else 3*protein.sum() - sum(hydrogens.values())
+    assert (protein.sum(), byHand) == (22, 45 if rigid else 54)
+    bodies = openmmrigid.rigidHydrogenGroups(built.topology, built.system) if rigid else None
+    integrator = setups.makeIntegrator("rigid-langevin" if rigid else "stock-middle", 2.0, floor=0.16 if rigid else None, bodies=bodies)
+    context = openmm.Context(built.system, integrator, openmm.Platform.getPlatformByName("Reference"))
+    context.setPositions(built.positions)
+    context.setVelocitiesToTemperature(300.0, 1)
+    integrator.step(2)
+    (kinetic, dof), (waterKinetic, waterDof) = (protein_mts.soluteKinetic(context, integrator, inside) for inside in (protein, ~protein))
+    whole = rigidDegreesOfFreedom(context, integrator) if rigid else rigidtesting.degreesOfFreedom(built.system)
+    assert (dof, waterDof, whole) == (byHand, 6*216, byHand + 6*216 - 3)
+    state = context.getState(getPositions=True, getVelocities=True, getEnergy=True)
+    assert kinetic(state) + waterKinetic(state) == pytest.approx(state.getKineticEnergy().value_in_unit(setups.KJ), rel=1e-6)
+    assert 0.2*dof*BOLTZMANN*300 < 2*kinetic(state) < 5*dof*BOLTZMANN*300   # a temperature, not a sum over the box
+
+
+def test_helical_basin_is_xh_groups_models_and_the_fluctuation_is_circular():
+    """On a 1-degree grid of (phi, psi) the basin counts what xh_groups_model.analyse counts (any moved edge would differ); an
+    ideal alpha helix is in it, beta, polyproline and left-handed helix are not. The fluctuation about a mean near +-180 deg is
+    the spread of the unwrapped angles, as near 0, not the 180 deg a linear mean would give."""
+    phi, psi = (grid.reshape(1, -1) for grid in np.meshgrid(np.arange(-180.0, 180.0), np.arange(-180.0, 180.0)))
+    theirs = xh_groups_model.analyse({}, np.zeros((1, 0)), phi, psi, np.zeros((1, 4)))["quantities"][0]
+    assert theirs[0] == "phi/psi: fraction alpha-helical" and theirs[2] == protein_mts.helical(phi, psi).mean()
+    assert list(protein_mts.helical(np.array([-57.0, -120.0, -75.0, 57.0]), np.array([-47.0, 130.0, 145.0, 47.0]))) == [True, False, False, False]
+    rng = np.random.default_rng(8)
+    spread = rng.normal(0.0, [10.0, 25.0], (4000, 2))
+    angles = (spread + [180.0, -40.0] + 180.0) % 360.0 - 180.0
+    assert protein_mts.dihedralFluctuation(angles) == pytest.approx(spread.std(axis=0).mean(), rel=1e-3)
+    assert protein_mts.dihedralFluctuation(angles[:, :1]) == pytest.approx(spread[:, 0].std(), rel=1e-3)
+
+
+class TablePage:
+    def section(self, title, text=""):
+        pass
+
+    def table(self, columns, rows):
+        self.columns, self.rows = columns, rows
+
+
+def test_biases_and_columns_of_the_solute_observables_only_where_runs_have_them():
+    """Runs that measured T_solute, helix and dihedral_rms get their biases against the model's reference (errors combined, or
+    none where a single run has no error) and three more columns, bold beyond two errors; runs from before (no such key) give
+    the table of before."""
+    def result(configuration, step, samples):
+        return dict(job=dict(system="villin", configuration=configuration, step=step), samples=samples, failed=None, blocked=False)
+    def sample(U, solute, helix, rms):
+        return dict(U=[U, 5.0], T=[300.0, 0.5], bonded=[100.0, 2.0], T_solute=[solute, 1.0], helix=[helix, 0.01], dihedral_rms=[rms, None])
+    results = [result("xh", 2, [sample(-10.0, 300.0, 0.5, 12.0), sample(-20.0, 302.0, 0.7, 14.0)]),
+               result("xh-mts", 8, [sample(-12.0, 311.0, 0.7, 20.0), sample(-18.0, 313.0, 0.5, 20.0)]),
+               result("xh-mts", 10, [sample(-15.0, 302.0, 0.6, 13.0)])]
+    rows, ran = protein_mts.biasRows(results)
+    eight = ran["villin", "xh-mts", 8]
+    assert (eight["T_solute_bias"], eight["helix_bias"], eight["dihedral_rms_bias"]) == pytest.approx((11.0, 0.0, 7.0))
+    assert (eight["T_solute_bias_error"], eight["dihedral_rms_bias_error"]) == pytest.approx((np.sqrt(2.0), 1.0))
+    assert ran["villin", "xh-mts", 10]["T_solute_bias_error"] == pytest.approx(np.hypot(1.0, 1.0))
+    assert ran["villin", "xh-mts", 10]["dihedral_rms_bias_error"] is None
+    page = TablePage()
+    protein_mts.section(page, "", "", rows)
+    assert page.columns[5:8] == ["T solute bias (K)", "helix bias", "dihedral rms bias (deg)"] and len(page.columns) == 12
+    assert page.rows[1][5:8] == ["**+11.0 ± 1.4**", "+0.000 ± 0.141", "**+7.0 ± 1.0**"] and page.rows[2][7] == "+0.0"
+    old = [dict(r, samples=[{k: s[k] for k in ("U", "T", "bonded")} for s in r["samples"]]) for r in results]
+    protein_mts.section(page, "", "", protein_mts.biasRows(old)[0])
+    assert len(page.columns) == 9 and "T (K)" in page.columns and not any("solute" in c for c in page.columns)
