@@ -21,9 +21,10 @@ CONFIGURATIONS = {   # name: (label, model, steps (fs), system variant, integrat
     "xh-mts-0.32": ("the same, moments raised to 0.32", "rigid X-H", [12], "plain", "rigid-mts"),
     "xh-mts-f5": ("the same, friction 5/ps", "rigid X-H", [12], "plain", "rigid-mts"),
     "planar": ("rigid X-H and planar groups", "rigid planar", [2], "plain", "rigid-planar"),
-    "planar-mts": ("rigid X-H and planar groups + bonded 1 fs", "rigid planar", [8, 10, 12, 14], "plain", "rigid-planar-mts")}
+    "planar-mts": ("rigid X-H and planar groups + bonded 1 fs", "rigid planar", [8, 10, 12, 14], "plain", "rigid-planar-mts"),
+    "planar-mts-2fs": ("rigid X-H and planar groups + bonded 2 fs", "rigid planar", [10, 12], "plain", "rigid-planar-mts")}
 REFERENCE = {"flexible": ("stock", 2), "H angles": ("hangles", 2), "rigid X-H": ("xh", 2), "rigid planar": ("planar", 2)}
-OVERRIDES = {"xh-mts-1fs": dict(substep=1.0), "xh-mts-0.32": dict(floor=0.32), "xh-mts-f5": dict(friction=5.0), "planar-mts": dict(substep=1.0)}   # of FLOOR, SUBSTEP, FRICTION
+OVERRIDES = {"xh-mts-1fs": dict(substep=1.0), "xh-mts-0.32": dict(floor=0.32), "xh-mts-f5": dict(friction=5.0), "planar-mts": dict(substep=1.0), "planar-mts-2fs": {}}   # of FLOOR, SUBSTEP, FRICTION
 FULL = dict(equilibrate_ps=1.0, sampled_ps=4.0, every_ps=0.1, timed_s=2.0, repetitions=5)
 QUICK = dict(equilibrate_ps=0.02, sampled_ps=0.1, every_ps=0.01, timed_s=0.0, repetitions=2)
 STARTS = {"villin": ("villin-tip3p-0.9nm", 5.0), "dipeptide": ("quick-dipeptide-tip3p-216", 0.2), "dhfr": ("dhfr-jac-tip3p", 5.0)}   # setups.start: name, ps
