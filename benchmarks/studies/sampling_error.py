@@ -20,7 +20,8 @@ from studies import protein_mts
 
 KJ, KT = unit.kilojoule_per_mole, setups.BOLTZMANN*setups.TEMPERATURE
 FLOOR = 0.08   # rigid-raised's moments of inertia, amu nm^2
-XH_FLOOR, XH_SUBSTEP = 0.16, 1.0   # rigid-mts: the protein's bodies' raised moments (amu nm^2), the bonded forces' substep (fs)
+XH_FLOOR = 0.16                         # rigid-mts*: the protein's bodies' raised moments (amu nm^2)
+SUBSTEPS = {"rigid-mts": 1.0, "rigid-mts-2fs": 2.0}   # their bonded forces' substep (fs)
 # ps: a half protocol, between frames, before them (Model: a protein model's, from an equilibrated start); True: quick
 SETUP = {False: dict(protocol=2.0, spacing=2.0, equilibrate=20.0, equilibrateModel=5.0),
          True: dict(protocol=0.2, spacing=0.25, equilibrate=0.5, equilibrateModel=0.5)}
@@ -82,13 +83,13 @@ def frames(name, count, env):
 
 def makeIntegrator(kind, stepFs, seed, shadow, bodies=None):
     """`kind` at 1/ps: with shadow, as measured (its shadow work summed); else as users run it (OpenMM's default constraint
-    tolerance, no accuracy check). rigid-mts: bodies (model()'s), XH_FLOOR, the bonded forces (group 1) in XH_SUBSTEP."""
+    tolerance, no accuracy check). rigid-mts*: bodies (model()'s), XH_FLOOR, the bonded forces (group 1) in SUBSTEPS."""
     if kind.startswith("rigid"):
         integrator = setups.makeIntegrator("rigid-langevin", stepFs, seed, bodies=bodies,
-                                           floor={"rigid-raised": FLOOR, "rigid-mts": XH_FLOOR}.get(kind),
+                                           floor=FLOOR if kind == "rigid-raised" else XH_FLOOR if kind in SUBSTEPS else None,
                                            rotation="nosquish" if kind == "rigid-nosquish" else "exact")
-        if kind == "rigid-mts":
-            integrator.setForceGroupSubsteps([(0, 1), (1, max(1, round(stepFs/XH_SUBSTEP)))])
+        if kind in SUBSTEPS:
+            integrator.setForceGroupSubsteps([(0, 1), (1, max(1, round(stepFs/SUBSTEPS[kind])))])
         integrator.setMeasureShadowWork(shadow)
         integrator.setAccuracyCheck(False)   # its two 2 ps windows outlast a half protocol
     elif kind == "stock-middle" and shadow:
@@ -179,7 +180,7 @@ def summarize(results, env):
         speeds = timeRows(here, env)
         for row in here:
             row["nsPerDay"] = speeds.get((row["system"], row["integrator"], row["step"]))
-    return {"setup": dict(SETUP[env.quick], floor=FLOOR, friction=setups.FRICTION, xhFloor=XH_FLOOR, xhSubstep=XH_SUBSTEP),
+    return {"setup": dict(SETUP[env.quick], floor=FLOOR, friction=setups.FRICTION, xhFloor=XH_FLOOR, substeps=SUBSTEPS),
             "rows": rows}
 
 def report(summary, page):
