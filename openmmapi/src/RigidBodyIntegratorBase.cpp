@@ -229,22 +229,17 @@ vector<Vec3> RigidBodyIntegratorBase::getVelocitiesForTemperature(const System& 
     // step): the other groups' share is given back at the end, and the slowest forces are the ones
     // that turn the raised bodies below.
     const double offset = getVelocityTimeOffset();
-    const bool nested = (offset != 0.0 && levels.size() > 1);
-    if (nested) {
+    const int slowest = (levels.size() > 1 ? levels[0].groups : -1);
+    velocities = raisedVelocities(velocities, offset, slowest);
+    if (offset != 0.0 && slowest != -1) {
         vector<Vec3> fast;
-        context->calcForcesAndEnergy(true, false, ~levels[0].groups);
+        context->calcForcesAndEnergy(true, false, ~slowest);
         context->getForces(fast);
         for (int i = 0; i < system.getNumParticles(); i++)
             if (system.getParticleMass(i) != 0.0)
-                fast[i] *= offset/system.getParticleMass(i);
-            else
-                fast[i] = Vec3();
-        velocities = raisedVelocities(velocities, offset, levels[0].groups);
-        for (int i = 0; i < system.getNumParticles(); i++)
-            velocities[i] += fast[i];
-        return velocities;
+                velocities[i] += fast[i]*(offset/system.getParticleMass(i));
     }
-    return raisedVelocities(velocities, offset, -1);
+    return velocities;
 }
 
 vector<Vec3> RigidBodyIntegratorBase::raisedVelocities(vector<Vec3> velocities, double offset, int groups) const {
