@@ -1,5 +1,5 @@
 """Rigid X-H groups and multiple time steps against stock OpenMM on a solvated protein. Another system: SYSTEMS, STARTS, the grid."""
-import functools, itertools, types
+import functools, itertools
 import numpy as np, openmm, openmm.app as app
 import openmmrigid, rigidtesting, setups
 from harness import Study, Unstable, blockMean, overSeeds, blockSteps, nsPerDay, pyplot, rigidDegreesOfFreedom, timeInterleaved
@@ -17,7 +17,6 @@ CONFIGURATIONS = {   # name: (label, model, steps (fs), system variant, integrat
     "xh-mts": ("rigid X-H groups + bonded 2 fs", "rigid X-H", [6, 8, 10, 12], "plain", "rigid-mts"),
     "mts": ("bonded 2 fs, X-H bonds constrained", "flexible", [4, 6, 8], "plain", "mts"),
     "stock-mts": ("stock MTSLangevinIntegrator, HMR 3 amu, bonded 2 fs", "flexible", [6, 8], "hmr", "stock-mts"),
-    # protein_step_cap's variants of xh-mts at one step, not in this study's grid
     "xh-mts-1fs": ("rigid X-H groups + bonded 1 fs", "rigid X-H", [12], "plain", "rigid-mts"),
     "xh-mts-0.32": ("the same, moments raised to 0.32", "rigid X-H", [12], "plain", "rigid-mts"),
     "xh-mts-f5": ("the same, friction 5/ps", "rigid X-H", [12], "plain", "rigid-mts"),
@@ -25,7 +24,8 @@ CONFIGURATIONS = {   # name: (label, model, steps (fs), system variant, integrat
     "planar-mts": ("rigid X-H and planar groups + bonded 1 fs", "rigid planar", [8, 10, 12, 14], "plain", "rigid-planar-mts"),
     "planar-mts-2fs": ("rigid X-H and planar groups + bonded 2 fs", "rigid planar", [10, 12], "plain", "rigid-planar-mts")}
 REFERENCE = {"flexible": ("stock", 2), "H angles": ("hangles", 2), "rigid X-H": ("xh", 2), "rigid planar": ("planar", 2)}
-OVERRIDES = {"xh-mts-1fs": dict(substep=1.0), "xh-mts-0.32": dict(floor=0.32), "xh-mts-f5": dict(friction=5.0), "planar-mts": dict(substep=1.0), "planar-mts-2fs": {}}   # of FLOOR, SUBSTEP, FRICTION
+OVERRIDES = {"xh-mts-1fs": dict(substep=1.0), "xh-mts-0.32": dict(floor=0.32), "xh-mts-f5": dict(friction=5.0), "planar-mts": dict(substep=1.0)}   # of FLOOR, SUBSTEP, FRICTION
+OWN = ["stock", "stock-hmr", "hangles", "recipe", "xh", "xh-mts", "mts"]   # this study's grid; the others are protein_step_cap's
 FULL = dict(equilibrate_ps=1.0, sampled_ps=4.0, every_ps=0.1, timed_s=2.0, repetitions=5)
 QUICK = dict(equilibrate_ps=0.02, sampled_ps=0.1, every_ps=0.01, timed_s=0.0, repetitions=2)
 STARTS = {"villin": ("villin-tip3p-0.9nm", 5.0), "dipeptide": ("quick-dipeptide-tip3p-216", 0.2), "dhfr": ("dhfr-jac-tip3p", 5.0)}   # setups.start: name, ps
@@ -90,22 +90,18 @@ def solute(built):
     return np.array([atom.residue.name not in setups.WATER and len(atom.residue) > 1 for atom in built.topology.atoms()])
 
 def soluteKinetic(context, integrator, inside):
-    """(kinetic energy (kJ/mol) of a State's particles in `inside` (a mask), their degrees of freedom), as the T column counts the whole system's:
-    the kinetic energy of rigid motion in the raised moments (the State's; rigidtesting.bodies.kineticEnergies) of the bodies inside and the free
-    particles, and harness.rigidDegreesOfFreedom read on a copy of the System whose other particles are massless, with the bodies inside (a stock
-    integrator has none); a CMMotionRemover's 3 are given back: it fixes the whole system's momentum, not the part's."""
-    system = openmm.XmlSerializer.deserialize(openmm.XmlSerializer.serialize(context.getSystem()))
-    for i in np.flatnonzero(~inside): system.setParticleMass(int(i), 0.0)
-    bodies = [body for body in integratorBodies(integrator) if inside[body].all()] if hasattr(integrator, "getNumBodies") else []
-    dof = rigidDegreesOfFreedom(types.SimpleNamespace(getSystem=lambda: system, getState=context.getState),
-                                types.SimpleNamespace(getNumBodies=lambda: len(bodies), getBodyParticles=bodies.__getitem__))
-    masses, floor = rigidtesting.particleMasses(system), integrator.getMinimumMomentOfInertia() if bodies else 0.0
+    """(the kinetic energy (kJ/mol) of a State's particles in `inside` (a mask), their degrees of freedom), as the T column counts the
+    whole system's: rigid motion in the raised moments (the State's; rigidtesting.bodies.kineticEnergies) of the bodies inside and the
+    free particles, and harness.rigidDegreesOfFreedom of the part."""
+    rigid = hasattr(integrator, "getNumBodies")
+    bodies = [body for body in integratorBodies(integrator) if inside[body].all()] if rigid else []
+    masses, floor = np.where(inside, rigidtesting.particleMasses(context.getSystem()), 0.0), integrator.getMinimumMomentOfInertia() if rigid else 0.0
     kinetic = lambda state: sum(kineticEnergies(state.getPositions(asNumpy=True)._value, state.getVelocities(asNumpy=True)._value, masses, bodies,
                                                 floor, state.getPeriodicBoxVectors(asNumpy=True)._value))
-    return kinetic, dof + 3*any(isinstance(force, openmm.CMMotionRemover) for force in system.getForces())
+    return kinetic, rigidDegreesOfFreedom(context, integrator, inside)
 
 def helical(phi, psi):
-    """Whether (phi, psi) (deg) is in the alpha-helical basin: xh_groups_model.analyse's (test_studies_proteins checks they agree)."""
+    """Whether (phi, psi) (deg) is in the alpha-helical basin (xh_groups_model.analyse counts its share too)."""
     return (phi > -160) & (phi < -20) & (psi > -120) & (psi < 50)
 
 def dihedralFluctuation(angles):
@@ -230,8 +226,6 @@ positions exact). One small protein, CPU only. With six runs a row (protein_step
 of about +50 kJ/mol at every outer step, 1 fs substeps remove it up to 8 fs (1.65 times stock HMR 4 fs), and stock HMR at 4 fs
 shows +328 kJ/mol in U: read this page's 10 fs at its resolution. protein_step_cap also measures planar groups (2.2 times at 10 fs on
 villin, 1.9 on DHFR) and stock MTSLangevinIntegrator.""",
-    grid=[{"system": ["villin"], "configuration": [name], "step": c[2], "seed": [0, 1, 2]} for name, c in CONFIGURATIONS.items()
-          if name not in OVERRIDES and not name.startswith("planar") and name != "stock-mts"],
-    quick=[{"system": ["dipeptide"], "configuration": [name], "step": c[2][:1], "seed": [0]} for name, c in CONFIGURATIONS.items()
-           if name not in OVERRIDES and not name.startswith("planar") and name != "stock-mts"],
+    grid=[{"system": ["villin"], "configuration": [name], "step": CONFIGURATIONS[name][2], "seed": [0, 1, 2]} for name in OWN],
+    quick=[{"system": ["dipeptide"], "configuration": [name], "step": CONFIGURATIONS[name][2][:1], "seed": [0]} for name in OWN],
     measure=measure, summarize=summarize)

@@ -2,7 +2,7 @@
 import numpy as np, openmm
 import openmmrigid, setups
 from harness import Study, blockMean, pyplot
-from studies.protein_mts import STARTS, build, overSeeds
+from studies.protein_mts import STARTS, build, helical, overSeeds
 from setups import BOLTZMANN, KJ
 
 TEMPERATURE, EDGES, RAMA = 310.0, np.linspace(80.0, 140.0, 41), np.linspace(-180.0, 180.0, 25)   # K; histogram bins (deg)
@@ -51,7 +51,7 @@ def analyse(counts, frames, phi, psi, energies):
         values, histograms[name] = frames[:, start:start + n], np.histogram(frames[:, start:start + n], EDGES)[0]
         quantities += [estimate(f"angle {name} ({n}): mean", "deg", values.mean(axis=1)),
                        estimate(f"angle {name}: rms fluctuation", "deg", np.mean((values - values.mean(axis=0))**2, axis=1), True)]
-    quantities += [estimate("phi/psi: fraction alpha-helical", "", np.mean((phi > -160) & (phi < -20) & (psi > -120) & (psi < 50), axis=1))]
+    quantities += [estimate("phi/psi: fraction alpha-helical", "", np.mean(helical(phi, psi), axis=1))]
     quantities += [estimate(name, "kJ/mol", energies[:, k]) for k, name in enumerate(list(TERMS) + ["U (whole box)"])]
     quantities.append(estimate("U less the three bonded terms", "kJ/mol", energies[:, 3] - energies[:, :3].sum(axis=1)))
     return {"quantities": quantities, "histograms": {name: counts.tolist() for name, counts in histograms.items()}}

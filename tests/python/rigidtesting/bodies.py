@@ -144,19 +144,23 @@ def rigidKineticEnergies(context, integrator, bodies=None, masses=None):
                            integrator.getMinimumMomentOfInertia(), box)
 
 
-def rigidDegreesOfFreedom(context, integrator):
+def rigidDegreesOfFreedom(context, integrator, inside=None):
     """3 per free particle less one per constraint between free particles, 3 + (0, 2 or 3) per body (one
-    particle, linear, other), less 3 with a CMMotionRemover."""
+    particle, linear, other), less 3 with a CMMotionRemover. With `inside` (a mask of particles): a part's,
+    its free particles and the bodies wholly inside, without the CMMotionRemover's 3 (it fixes the whole
+    system's momentum, not the part's). An integrator without bodies (a stock one) has every particle free."""
     system = context.getSystem()
     masses = particleMasses(system)
-    free = masses > 0
-    for body in integratorBodies(integrator):
+    free = masses > 0 if inside is None else (masses > 0) & inside
+    bodies = integratorBodies(integrator) if hasattr(integrator, "getNumBodies") else []
+    for body in bodies:
         free[body] = False
     dof = 3 * int(np.count_nonzero(free))
-    dof += sum(3 + {"point": 0, "linear": 2}.get(kind, 3) for kind in bodyKinds(context, integrator))
+    dof += sum(3 + {"point": 0, "linear": 2}.get(kind, 3) for body, kind in zip(bodies, bodyKinds(context, integrator) if bodies else [])
+               if inside is None or inside[body].all())
     for c in range(system.getNumConstraints()):
         i, j, _ = system.getConstraintParameters(c)
         dof -= int(free[i] and free[j])
-    if any(isinstance(force, openmm.CMMotionRemover) for force in system.getForces()):
+    if inside is None and any(isinstance(force, openmm.CMMotionRemover) for force in system.getForces()):
         dof -= 3
     return dof
